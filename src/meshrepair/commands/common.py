@@ -1,0 +1,54 @@
+"""Helpers shared by the CLI sub-commands: safe output paths, progress bars."""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+from ..errors import MeshRepairError
+
+MESH_SUFFIXES = (".ply", ".obj", ".off", ".stl")
+
+
+def output_path(out: str | os.PathLike, inputs: list, *, force: bool = False,
+                suffixes: tuple[str, ...] = MESH_SUFFIXES) -> Path:
+    """Validate an output path: known suffix, never an input file, no silent overwrite.
+
+    Raises
+    ------
+    MeshRepairError
+        If ``out`` has an unknown suffix, is one of ``inputs`` (always refused, even with
+        ``force``), or exists and ``force`` is False.
+    """
+    o = Path(out)
+    if o.suffix.lower() not in suffixes:
+        raise MeshRepairError(f"output {str(o)!r} must end with one of {', '.join(suffixes)}")
+    for i in inputs:
+        if i is None:
+            continue
+        ip = Path(i)
+        if ip.resolve() == o.resolve() or (o.exists() and ip.exists() and os.path.samefile(ip, o)):
+            raise MeshRepairError(
+                f"output {str(o)!r} is the input file; refusing to overwrite your data, choose "
+                "another output name")
+    if o.exists() and not force:
+        raise MeshRepairError(f"output {str(o)!r} exists; pass --force to overwrite it")
+    if not o.parent.exists():
+        raise MeshRepairError(f"the folder of the output {str(o)!r} does not exist")
+    return o
+
+
+class ProgressBar:
+    """A tqdm progress bar fed by the solver's per-iteration callback."""
+
+    def __init__(self, total: int, desc: str, enabled: bool = True):
+        from tqdm import tqdm
+
+        self.bar = tqdm(total=total, desc=desc, unit="it", disable=not enabled, leave=False)
+
+    def __call__(self, entry: dict) -> None:
+        self.bar.update(1)
+        self.bar.set_postfix(stage=entry.get("stage", ""), change=f"{entry['rel_change']:.1e}")
+
+    def close(self) -> None:
+        self.bar.close()

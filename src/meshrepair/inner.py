@@ -1,0 +1,196 @@
+"""The V-subproblem (26) and its inner solvers.
+
+.. math::
+    \\mathcal J_V(V) = \\frac{\\lambda}{2}\\sum_i (M_V)_i \\|V_i - V^0_i\\|^2
+        + \\sum_m \\langle \\rho_{2m} - \\beta_2 N_m, \\mathcal N_m(V)\\rangle \\; (+\\text{const})
+
+(the ``β2/2 ||N_m - 𝒩_m(V)||²`` term equals ``β2 - β2 <N_m, 𝒩_m(V)>`` for unit vectors). Its
+gradient is (28). All inner solvers share :class:`VSubproblem`'s energy-and-gradient kernel and are
+warm-started from the previous ADMM iterate.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.sparse as sp
+
+INNER_SOLVERS = ("armijo", "gd", "heavy_ball", "lbfgs", "bfgs")
+
+
+class VSubproblem:
+    """Energy and gradient of (26) for a fixed connectivity.
+
+    Parameters
+    ----------
+    F : (nF, 3) int64
+    n_vertices : int
+    fixed : (nV,) bool, optional
+        Vertices that do not move (their gradient is zeroed).
+    """
+
+    def __init__(self, F: np.ndarray, n_vertices: int, fixed: np.ndarray | None = None):
+        self.F = np.asarray(F, dtype=np.int64)
+        nF = len(self.F)
+        self.nV = int(n_vertices)
+        cols = np.arange(3 * nF)
+        rows = self.F.T.ravel()  # corner k of face m -> column k*nF + m
+        self.S = sp.csr_matrix((np.ones(3 * nF), (rows, cols)), shape=(self.nV, 3 * nF))
+        self.free = None if fixed is None or not np.any(fixed) else ~np.asarray(fixed, bool)
+        self.V0 = np.zeros((self.nV, 3))
+        self.wfid = np.zeros(self.nV)
+        self.z = np.zeros((nF, 3))
+        self.n_energy = 0
+        self.n_grad = 0
+
+    def set(self, V0: np.ndarray, fidelity: np.ndarray, z: np.ndarray) -> None:
+        """Set ``V0``, the per-vertex fidelity weights ``λ (M_V)_i²`` and ``z = ρ2 - β2 N``."""
+        self.V0 = V0
+        self.wfid = fidelity
+        self.z = z
+
+    def energy(self, V: np.ndarray) -> float:
+        """``J_V(V)`` up to a constant."""
+        self.n_energy += 1
+        F = self.F
+        p0 = V[F[:, 0]]
+        c = np.cross(V[F[:, 1]] - p0, V[F[:, 2]] - p0)
+        q = np.sqrt(np.einsum("ij,ij->i", c, c))
+        q = np.maximum(q, 1e-300)
+        e = float(np.einsum("ij,ij->", self.z, c / q[:, None]))
+        d = V - self.V0
+        return e + 0.5 * float(np.einsum("i,ij,ij->", self.wfid, d, d))
+
+    def energy_grad(self, V: np.ndarray) -> tuple[float, np.ndarray]:
+        """``(J_V(V), ∇J_V(V))`` with the gradient (28), shape ``(nV, 3)``."""
+        self.n_energy += 1
+        self.n_grad += 1
+        F = self.F
+        p0, p1, p2 = V[F[:, 0]], V[F[:, 1]], V[F[:, 2]]
+        c = np.cross(p1 - p0, p2 - p0)
+        q = np.sqrt(np.einsum("ij,ij->i", c, c))
+        q = np.maximum(q, 1e-300)
+        n = c / q[:, None]
+        z = self.z
+        zn = np.einsum("ij,ij->i", z, n)
+        e = float(zn.sum())
+        g = (z - zn[:, None] * n) / q[:, None]
+        contrib = np.concatenate([np.cross(g, p2 - p1), np.cross(g, p0 - p2), np.cross(g, p1 - p0)])
+        grad = self.S @ contrib
+        d = V - self.V0
+        e += 0.5 * float(np.einsum("i,ij,ij->", self.wfid, d, d))
+        grad += self.wfid[:, None] * d
+        if self.free is not None:
+            grad[~self.free] = 0.0
+        return e, grad
+
+
+@dataclass
+class InnerState:
+    """What an inner solver remembers between ADMM iterations (the last accepted step)."""
+
+    step: float = 1e-2
+
+
+def _armijo_line(prob: VSubproblem, V, E, g, d, slope, step, c1=1e-4, shrink=0.5):
+    """Backtrack along direction ``d`` (``slope = <g, d> < 0``) until (31) holds."""
+    while step > 1e-14:
+        Vn = V + step * d
+        En = prob.energy(Vn)
+        if En <= E + c1 * step * slope:
+            return Vn, En, step
+        step *= shrink
+    return V, E, 0.0
+
+
+def solve_armijo(prob: VSubproblem, V: np.ndarray, iters: int, state: InnerState) -> np.ndarray:
+    """Gradient descent with Armijo backtracking (31), starting from twice the last step."""
+    E, g = prob.energy_grad(V)
+    step = state.step * 2.0
+    for it in range(iters):
+        gg = float(np.einsum("ij,ij->", g, g))
+        if gg == 0.0:
+            break
+        V, E, step = _armijo_line(prob, V, E, g, -g, -gg, step)
+        if step == 0.0:
+            step = state.step
+            break
+        state.step = step
+        if it + 1 < iters:
+            E, g = prob.energy_grad(V)
+            step *= 2.0
+    return V
+
+
+def solve_gd(prob: VSubproblem, V: np.ndarray, iters: int, state: InnerState,
+             step: float | None = None) -> np.ndarray:
+    """Plain gradient descent with a fixed step (``state.step`` unless given)."""
+    alpha = state.step if step is None else step
+    for _ in range(iters):
+        _, g = prob.energy_grad(V)
+        V = V - alpha * g
+    return V
+
+
+def solve_heavy_ball(prob: VSubproblem, V: np.ndarray, iters: int, state: InnerState,
+                     delta: float = 0.5) -> np.ndarray:
+    """Heavy-ball iteration (27) with backtracking on the step (the momentum term is kept when
+    the combined direction descends, dropped otherwise)."""
+    E, g = prob.energy_grad(V)
+    Vprev = V.copy()
+    step = state.step * 2.0
+    for it in range(iters):
+        d = -g + (delta / max(step, 1e-300)) * (V - Vprev)
+        slope = float(np.einsum("ij,ij->", g, d))
+        if slope >= 0:
+            d = -g
+            slope = -float(np.einsum("ij,ij->", g, g))
+        if slope == 0.0:
+            break
+        Vn, En, s = _armijo_line(prob, V, E, g, d, slope, step)
+        if s == 0.0:
+            break
+        Vprev, V, E = V, Vn, En
+        state.step = step = s
+        if it + 1 < iters:
+            E, g = prob.energy_grad(V)
+            step *= 2.0
+    return V
+
+
+def solve_lbfgs(prob: VSubproblem, V: np.ndarray, iters: int, state: InnerState,
+                method: str = "L-BFGS-B") -> np.ndarray:
+    """(L-)BFGS from scipy on the flattened coordinates, warm-started at ``V``."""
+    from scipy.optimize import minimize
+
+    shape = V.shape
+
+    def fun(x):
+        e, g = prob.energy_grad(x.reshape(shape))
+        return e, g.ravel()
+
+    opts = {"maxiter": iters, "gtol": 1e-9}
+    if method == "L-BFGS-B":
+        opts["ftol"] = 1e-15
+    res = minimize(fun, V.ravel(), jac=True, method=method, options=opts)
+    return res.x.reshape(shape)
+
+
+def run_inner(name: str, prob: VSubproblem, V: np.ndarray, iters: int, state: InnerState
+              ) -> np.ndarray:
+    """Dispatch to the inner solver ``name`` (one of :data:`INNER_SOLVERS`)."""
+    if name == "armijo":
+        return solve_armijo(prob, V, iters, state)
+    if name == "gd":
+        return solve_gd(prob, V, iters, state)
+    if name == "heavy_ball":
+        return solve_heavy_ball(prob, V, iters, state)
+    if name == "lbfgs":
+        return solve_lbfgs(prob, V, iters, state)
+    if name == "bfgs":
+        if V.size > 30000:
+            raise ValueError("inner_solver='bfgs' stores a dense Hessian; use 'lbfgs' for meshes "
+                             "with more than 10000 vertices")
+        return solve_lbfgs(prob, V, iters, state, method="BFGS")
+    raise ValueError(f"unknown inner solver {name!r}; choose one of {INNER_SOLVERS}")

@@ -1,0 +1,372 @@
+"""The ADMM solver (17)-(21) for energy (6), shared by every task.
+
+A task (denoise, fill, complete) only builds the masks and the initial mesh, then calls
+:class:`ADMMSolver`. The solver never knows which task called it.
+
+Units. The solver works in centred coordinates divided by the mean edge length ``l̄`` of the
+initial mesh, so every parameter is scale-free: scaling, rotating or translating the input does
+the same to the output. λ is therefore "per squared mean edge length".
+
+Schedule. A run is a sequence of :class:`Stage` s sharing the variables and multipliers. Each
+stage fixes the MC non-convexity ``a``, ``β1 = ε a`` (rule (24)), ``β2 = ratio · β1`` and how the
+sharp-edge mask M_E is made: ``"all"`` (MC on every free edge: a robust ℓ0-like smoother),
+``"adaptive"`` (dihedral threshold ``th`` on the current normals, taken when the stage starts and
+optionally every ``mask_update_every`` iterations) or ``"none"`` (edge-Willmore only). A stage
+ends after ``max_iter`` iterations or when the relative change of V falls below its
+``switch_tol``; the last stage ends by rule (35):
+
+.. math:: \\|V^{(k+1)} - V^{(k)}\\|_2 / \\|V^{(k)}\\|_2 < \\text{tol}.
+"""
+
+from __future__ import annotations
+
+import logging
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+from .geometry import edge_lengths, face_normals, sharp_edge_mask
+from .inner import INNER_SOLVERS, InnerState, VSubproblem, run_inner
+from .linear import N_SOLVERS, solve_normals
+from .operators import apply_gradient, apply_gradient_transpose, normal_system_matrix
+from .penalties import mc_penalty, t_update
+from .relax import TangentialRelaxer
+from .topology import Topology, edge_topology
+
+log = logging.getLogger(__name__)
+
+MASK_MODES = ("all", "adaptive", "none", "given")
+
+
+@dataclass(frozen=True)
+class Stage:
+    """One phase of the ADMM schedule.
+
+    Attributes
+    ----------
+    a : MC non-convexity of (7).
+    eps : ε > 1 of rule (24); ``β1 = ε a``.
+    beta2_ratio : ``β2 / β1``.
+    mask : how M_E is made, one of ``"all" | "adaptive" | "none" | "given"``.
+    max_iter : iteration cap of the stage.
+    switch_tol : leave the stage when the relative change of V is below this (after ``min_iter``).
+    min_iter : minimum number of iterations.
+    relax : tangential relaxation weight per iteration (0 disables).
+    name : label shown in the history.
+    """
+
+    a: float
+    eps: float
+    beta2_ratio: float
+    mask: str = "adaptive"
+    max_iter: int = 100
+    switch_tol: float = 0.0
+    min_iter: int = 1
+    relax: float = 0.0
+    name: str = "stage"
+
+    @property
+    def beta1(self) -> float:
+        return self.eps * self.a
+
+
+@dataclass(frozen=True)
+class SolverOptions:
+    """Options of :class:`ADMMSolver` (paper symbols in brackets).
+
+    Attributes
+    ----------
+    lam : fidelity weight [λ], per squared mean edge length.
+    th : dihedral threshold of (5) in degrees [th].
+    willmore_weight : weight of the edge-Willmore term on non-sharp edges (1 in (6)).
+    stages : the schedule (see :class:`Stage`).
+    tol : rule (35) tolerance for the last stage.
+    inner_solver : V-subproblem solver: ``"armijo" | "gd" | "heavy_ball" | "lbfgs" | "bfgs"``.
+    inner_iters : inner iterations per ADMM iteration (warm-started).
+    n_solver : N-subproblem solver, ``"auto" | "cg" | "direct"``.
+    n_rtol : relative residual of the iterative N-solve.
+    mask_update_every : recompute an adaptive M_E every this many iterations (0 = only at stage
+        start); the paper's dynamic update uses 3.
+    mask_source : ``"N"`` (the ADMM normal variable, less noisy) or ``"V"`` (normals of the mesh).
+    min_feature_edges : an adaptive mask keeps only sharp edges in connected chains of at least
+        this many sharp edges (1 keeps all). Real creases are long lines; what residual noise
+        marks sharp is scattered in short pieces.
+    """
+
+    lam: float = 0.1
+    th: float = 30.0
+    willmore_weight: float = 1.0
+    stages: tuple[Stage, ...] = (Stage(a=10.0, eps=1.2, beta2_ratio=1.7, mask="adaptive",
+                                       max_iter=200, name="feature"),)
+    tol: float = 1e-6
+    inner_solver: str = "armijo"
+    inner_iters: int = 3
+    n_solver: str = "auto"
+    n_rtol: float = 1e-5
+    mask_update_every: int = 0
+    mask_source: str = "N"
+    min_feature_edges: int = 1
+
+    def validate(self) -> None:
+        from .errors import MeshRepairError
+
+        if self.inner_solver not in INNER_SOLVERS:
+            raise MeshRepairError(f"inner_solver must be one of {INNER_SOLVERS}, "
+                                  f"got {self.inner_solver!r}")
+        if self.n_solver not in N_SOLVERS:
+            raise MeshRepairError(f"n_solver must be one of {N_SOLVERS}, got {self.n_solver!r}")
+        if not self.lam >= 0 or not np.isfinite(self.lam):
+            raise MeshRepairError(f"lam must be a finite number >= 0, got {self.lam}")
+        if not 0 < self.th < 180:
+            raise MeshRepairError(f"th must be an angle in (0, 180) degrees, got {self.th}")
+        if not self.stages:
+            raise MeshRepairError("at least one stage is needed")
+        for s in self.stages:
+            if s.mask not in MASK_MODES:
+                raise MeshRepairError(f"stage mask must be one of {MASK_MODES}, got {s.mask!r}")
+            if not s.eps > 1:
+                raise MeshRepairError(f"stage eps must be > 1 (rule (24)), got {s.eps}")
+            if not (s.a > 0 and s.beta2_ratio > 0 and s.max_iter >= 0):
+                raise MeshRepairError(f"invalid stage {s}")
+
+
+@dataclass
+class SolverResult:
+    """Output of :meth:`ADMMSolver.solve`.
+
+    Attributes
+    ----------
+    V : (nV, 3) float64, restored vertices (input units).
+    F : (nF, 3) int64, the connectivity (unchanged).
+    N : (nF, 3) the ADMM normal variable at the end.
+    M_E : (nE,) bool, the sharp-edge mask of the last stage.
+    M_V : (nV,) float64, the fidelity mask.
+    edges : (nE, 2) the edge list M_E refers to.
+    history : list of dict per iteration: ``iter, stage, energy, rel_change, res_t, res_N,
+        n_sharp, time``.
+    iterations : int
+    stop_reason : str
+    """
+
+    V: np.ndarray
+    F: np.ndarray
+    N: np.ndarray
+    M_E: np.ndarray
+    M_V: np.ndarray
+    edges: np.ndarray
+    history: list[dict] = field(default_factory=list)
+    iterations: int = 0
+    stop_reason: str = ""
+    scale: float = 1.0
+
+
+def _drop_short_chains(mask: np.ndarray, topo: Topology, min_edges: int) -> np.ndarray:
+    """Unset the edges of ``mask`` whose connected sharp-edge component has < ``min_edges``."""
+    import scipy.sparse as sp
+    from scipy.sparse.csgraph import connected_components
+
+    idx = np.flatnonzero(mask)
+    if len(idx) == 0:
+        return mask
+    e = topo.edges[idx]
+    nV = topo.n_vertices
+    A = sp.coo_matrix((np.ones(len(e)), (e[:, 0], e[:, 1])), shape=(nV, nV))
+    n, lab = connected_components(A, directed=False)
+    cnt = np.bincount(lab[e[:, 0]], minlength=n)
+    out = mask.copy()
+    out[idx[cnt[lab[e[:, 0]]] < min_edges]] = False
+    return out
+
+
+class StopRequested(Exception):
+    """Raise from a callback to stop the solver; the current iterate is returned."""
+
+
+class ADMMSolver:
+    """Stateful ADMM solver for (6) on a fixed connectivity.
+
+    Parameters
+    ----------
+    F : (nF, 3) int
+    n_vertices : int
+    M_V : (nV,) float, fidelity mask (1 keep close to V0, 0 free: the region S_D).
+    edge_force : (nE,) int, optional
+        Per-edge override of M_E aligned with ``self.topo.edges``: -1 free (the stage decides),
+        0 always smooth (Willmore), 1 always sharp (MC).
+    fixed : (nV,) bool, optional, vertices that never move.
+    options : SolverOptions
+    topo : Topology, optional (precomputed)
+    """
+
+    def __init__(self, F: np.ndarray, n_vertices: int, *, M_V: np.ndarray | None = None,
+                 edge_force: np.ndarray | None = None, fixed: np.ndarray | None = None,
+                 options: SolverOptions | None = None, topo: Topology | None = None):
+        self.options = options or SolverOptions()
+        self.options.validate()
+        self.F = np.asarray(F, dtype=np.int64)
+        self.topo = topo if topo is not None else edge_topology(self.F, n_vertices)
+        nV = self.topo.n_vertices
+        self.M_V = np.ones(nV) if M_V is None else np.asarray(M_V, dtype=np.float64)
+        self.edge_force = (np.full(self.topo.n_edges, -1, np.int8) if edge_force is None
+                           else np.asarray(edge_force, dtype=np.int8))
+        self.fixed = None if fixed is None else np.asarray(fixed, dtype=bool)
+        self.vsub = VSubproblem(self.F, nV, fixed=self.fixed)
+        self.relaxer = TangentialRelaxer(self.topo, self.fixed)
+
+    # -- masks ---------------------------------------------------------------------------------
+    def _mask(self, mode: str, normals: np.ndarray, given: np.ndarray | None) -> np.ndarray:
+        nE = self.topo.n_edges
+        if mode == "all":
+            m = self.topo.interior.copy()
+        elif mode == "none":
+            m = np.zeros(nE, bool)
+        elif mode == "given":
+            m = np.zeros(nE, bool) if given is None else np.asarray(given, bool).copy()
+        else:
+            m = sharp_edge_mask(normals, self.topo, self.options.th).astype(bool)
+            if self.options.min_feature_edges > 1:
+                m = _drop_short_chains(m, self.topo, self.options.min_feature_edges)
+        m[self.edge_force == 0] = False
+        m[self.edge_force == 1] = True
+        return m
+
+    def energy(self, V: np.ndarray, V0: np.ndarray, sharp: np.ndarray, a: float) -> float:
+        """Energy (6) at ``V`` (normalised units) for mask ``sharp`` and non-convexity ``a``."""
+        o = self.options
+        Nv = face_normals(V, self.F)
+        t = apply_gradient(Nv, edge_lengths(V, self.topo.edges), self.topo)
+        nt = np.sqrt(np.einsum("ij,ij->i", t, t))
+        reg = np.where(sharp, mc_penalty(nt, a), o.willmore_weight * nt**2).sum()
+        d = V - V0
+        fid = 0.5 * o.lam * float(np.einsum("i,ij,ij->", self.M_V**2, d, d))
+        return float(reg + fid)
+
+    # -- main loop -----------------------------------------------------------------------------
+    def solve(self, V0: np.ndarray, V_init: np.ndarray | None = None, *,
+              given_mask: np.ndarray | None = None,
+              callback: Callable[[dict], None] | None = None) -> SolverResult:
+        """Run the schedule from ``V_init`` (default ``V0``) with data ``V0``.
+
+        Parameters
+        ----------
+        V0 : (nV, 3) data of the fidelity term.
+        V_init : (nV, 3), optional initial mesh (e.g. with a filled hole).
+        given_mask : (nE,) bool, M_E for stages whose mask is ``"given"``.
+        callback : called with each history entry; raise :class:`StopRequested` to stop.
+
+        Returns
+        -------
+        SolverResult
+        """
+        o = self.options
+        topo = self.topo
+        V0 = np.asarray(V0, dtype=np.float64)
+        Vi = V0 if V_init is None else np.asarray(V_init, dtype=np.float64)
+        used = np.zeros(topo.n_vertices, bool)
+        used[self.F.ravel()] = True
+        center = Vi[used].mean(axis=0)
+        scale = float(edge_lengths(Vi, topo.edges).mean())
+        if not scale > 0:
+            from .errors import MeshRepairError
+
+            raise MeshRepairError("all edges have zero length; the mesh has no extent")
+        X0 = (V0 - center) / scale
+        V = (Vi - center) / scale
+        fid = o.lam * self.M_V**2
+
+        N = face_normals(V, self.F)
+        rho1 = np.zeros((topo.n_edges, 3))
+        rho2 = np.zeros((topo.n_faces, 3))
+        state = InnerState(step=1e-2)
+        history: list[dict] = []
+        t_start = time.perf_counter()
+        k = 0
+        stop_reason = "max_iter"
+        sharp = np.zeros(topo.n_edges, bool)
+        try:
+            for si, stage in enumerate(o.stages):
+                last = si == len(o.stages) - 1
+                src = N if o.mask_source == "N" else face_normals(V, self.F)
+                sharp = self._mask(stage.mask, src, given_mask)
+                beta1 = stage.beta1 if (sharp.any() or stage.mask == "all") else max(
+                    stage.beta1, stage.eps * 2.0 * o.willmore_weight)
+                if sharp.any() and beta1 <= stage.a:
+                    beta1 = 1.01 * stage.a
+                beta2 = stage.beta2_ratio * beta1
+                log.info("stage %s: a=%g beta1=%g beta2=%g sharp edges %d/%d", stage.name,
+                         stage.a, beta1, beta2, int(sharp.sum()), topo.n_edges)
+                for j in range(stage.max_iter):
+                    if (stage.mask == "adaptive" and o.mask_update_every and j > 0
+                            and j % o.mask_update_every == 0):
+                        src = N if o.mask_source == "N" else face_normals(V, self.F)
+                        sharp = self._mask("adaptive", src, given_mask)
+                    l = edge_lengths(V, topo.edges)
+                    # (17) t-update
+                    DN = apply_gradient(N, l, topo)
+                    t = t_update(DN, rho1, sharp, a=stage.a, beta1=beta1,
+                                 willmore_weight=o.willmore_weight)
+                    # (18) N-update via (25), then normalise
+                    c = beta2 / beta1
+                    A = normal_system_matrix(l, topo, c)
+                    Nv = face_normals(V, self.F)
+                    B = c * Nv + rho2 / beta1 + apply_gradient_transpose(t - rho1 / beta1, l, topo)
+                    N, _ = solve_normals(A, B, N, method=o.n_solver, rtol=o.n_rtol)
+                    nn = np.linalg.norm(N, axis=1, keepdims=True)
+                    N = np.divide(N, nn, out=Nv.copy(), where=nn > 0)
+                    # (19) V-update: inner solver on (26), warm-started
+                    self.vsub.set(X0, fid, rho2 - beta2 * N)
+                    Vn = run_inner(o.inner_solver, self.vsub, V, o.inner_iters, state)
+                    if stage.relax > 0:
+                        Vn = self.relaxer.step(Vn, sharp, stage.relax)
+                    # (20)-(21) multipliers
+                    DN_new = apply_gradient(N, l, topo)
+                    r_t = t - DN_new
+                    rho1 = rho1 - beta1 * r_t
+                    Nv_new = face_normals(Vn, self.F)
+                    r_n = N - Nv_new
+                    rho2 = rho2 - beta2 * r_n
+                    rel = float(np.linalg.norm(Vn - V) / max(np.linalg.norm(V), 1e-300))
+                    V = Vn
+                    k += 1
+                    entry = {
+                        "iter": k,
+                        "stage": stage.name,
+                        "energy": self.energy(V, X0, sharp, stage.a),
+                        "rel_change": rel,
+                        "res_t": float(np.sqrt(np.mean(np.einsum("ij,ij->i", r_t, r_t)))),
+                        "res_N": float(np.sqrt(np.mean(np.einsum("ij,ij->i", r_n, r_n)))),
+                        "n_sharp": int(sharp.sum()),
+                        "time": time.perf_counter() - t_start,
+                    }
+                    history.append(entry)
+                    if callback is not None:
+                        callback(entry)
+                    if j + 1 >= stage.min_iter:
+                        if last and rel < o.tol:
+                            stop_reason = "rule (35)"
+                            break
+                        if not last and rel < stage.switch_tol:
+                            break
+        except (StopRequested, KeyboardInterrupt) as exc:
+            stop_reason = "interrupted" if isinstance(exc, KeyboardInterrupt) else "callback"
+            log.warning("solver stopped by %s after %d iterations", stop_reason, k)
+        return SolverResult(
+            V=V * scale + center,
+            F=self.F.copy(),
+            N=N,
+            M_E=sharp,
+            M_V=self.M_V.copy(),
+            edges=topo.edges.copy(),
+            history=history,
+            iterations=k,
+            stop_reason=stop_reason,
+            scale=scale,
+        )
+
+    def with_options(self, **changes) -> ADMMSolver:
+        """A solver on the same connectivity with some options changed (reuses the topology)."""
+        return ADMMSolver(self.F, self.topo.n_vertices, M_V=self.M_V, edge_force=self.edge_force,
+                          fixed=self.fixed, options=replace(self.options, **changes),
+                          topo=self.topo)

@@ -1,0 +1,79 @@
+"""The meshrepair command: help, demo, denoise/noise/metrics, refusal to overwrite."""
+
+import json
+
+import numpy as np
+import pytest
+
+from meshrepair.cli import build_parser, main
+from meshrepair.io import read_mesh, write_mesh
+
+from .conftest import SHARED
+
+
+def test_help_lists_commands(capsys):
+    with pytest.raises(SystemExit):
+        main(["--help"])
+    out = capsys.readouterr().out
+    for cmd in ("denoise", "noise", "metrics", "demo"):
+        assert cmd in out
+
+
+def test_noise_denoise_metrics_roundtrip(tmp_path, capsys):
+    src = SHARED / "spot.ply"
+    noisy = tmp_path / "noisy.ply"
+    out = tmp_path / "out.ply"
+    assert main(["noise", str(src), str(noisy), "--gamma", "0.2", "--seed", "3"]) == 0
+    assert main(["denoise", str(noisy), str(out), "-q", "--save-mask",
+                 "--log", str(tmp_path / "h.json")]) == 0
+    r, _n, g = read_mesh(out), read_mesh(noisy), read_mesh(src)
+    assert np.array_equal(r.F, g.F) and r.V.shape == g.V.shape
+    assert "sharp" in r.vertex_attributes
+    hist = json.loads((tmp_path / "h.json").read_text())
+    assert len(hist["history"]) > 10
+    capsys.readouterr()
+    assert main(["metrics", str(out), str(src), "--json"]) == 0
+    m_out = json.loads(capsys.readouterr().out)
+    assert main(["metrics", str(noisy), str(src), "--json"]) == 0
+    m_in = json.loads(capsys.readouterr().out)
+    assert m_out["MSAE (deg^2)"] < m_in["MSAE (deg^2)"] / 5
+
+
+def test_refuses_to_overwrite_input_and_existing(tmp_path, capsys):
+    p = tmp_path / "m.ply"
+    V = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1.0]])
+    F = np.array([[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]])
+    write_mesh(p, V, F)
+    before = p.read_bytes()
+    assert main(["denoise", str(p), str(p), "-q"]) == 2
+    assert "input" in capsys.readouterr().err
+    assert main(["denoise", str(p), str(p), "-q", "--force"]) == 2
+    assert p.read_bytes() == before
+    other = tmp_path / "o.ply"
+    other.write_bytes(b"keep me")
+    assert main(["noise", str(p), str(other)]) == 2
+    assert "--force" in capsys.readouterr().err
+    assert other.read_bytes() == b"keep me"
+
+
+def test_unreadable_file_is_a_clear_error(tmp_path, capsys):
+    bad = tmp_path / "bad.ply"
+    bad.write_text("this is not a mesh")
+    assert main(["denoise", str(bad), str(tmp_path / "o.ply"), "-q"]) == 2
+    err = capsys.readouterr().err
+    assert "bad.ply" in err and "error" in err
+
+
+def test_demo_runs_and_reports_errors(tmp_path, capsys):
+    assert main(["demo", "--outdir", str(tmp_path), "--quiet", "--no-render"]) == 0
+    out = capsys.readouterr().out
+    lines = {ln.split()[0]: ln.split() for ln in out.splitlines() if ln.strip()}
+    noisy, den = float(lines["noisy"][1]), float(lines["denoised"][1])
+    assert den < noisy / 20
+    assert (tmp_path / "fandisk_denoised.ply").exists()
+
+
+def test_parser_options_documented():
+    p = build_parser()
+    text = p.format_help()
+    assert "demo" in text
