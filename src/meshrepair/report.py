@@ -1,0 +1,452 @@
+"""A self-contained HTML report of one repair run.
+
+:func:`write_report` writes ONE HTML file that opens offline in any browser: every picture is an
+embedded ``data:image/png;base64,...`` URI, the style sheet is inline and there is no JavaScript.
+The page shows the input and output renders (same camera, one curvature colour range), each mask
+drawn over the mesh it belongs to, a metrics table, a convergence plot of the solver history
+(matplotlib, Agg backend) and the parameters and timings tables. All text is HTML-escaped.
+"""
+
+from __future__ import annotations
+
+import base64
+import html
+import io
+import logging
+import math
+import os
+from collections.abc import Mapping, Sequence
+from datetime import datetime, timezone
+from pathlib import Path
+
+import numpy as np
+
+from .errors import MeshRepairError
+from .topology import edge_topology
+
+__all__ = ["convergence_plot", "write_report"]
+
+log = logging.getLogger(__name__)
+
+_CSS = """
+body { font-family: -apple-system, 'Segoe UI', Helvetica, Arial, sans-serif; margin: 2em auto;
+       max-width: 1200px; color: #222; padding: 0 1em; }
+h1 { font-size: 1.6em; border-bottom: 2px solid #ccc; padding-bottom: .3em; }
+h2 { font-size: 1.25em; margin-top: 1.8em; }
+table { border-collapse: collapse; margin: .5em 0 1em 0; font-size: .95em; }
+th, td { border: 1px solid #ccc; padding: .3em .8em; text-align: left; vertical-align: top; }
+th { background: #f2f2f2; }
+td.num { text-align: right; font-family: Menlo, Consolas, monospace; }
+figure { display: inline-block; margin: .5em 1em .5em 0; vertical-align: top; }
+figure img { max-width: 100%; border: 1px solid #ddd; }
+figcaption { font-size: .9em; color: #555; margin-top: .3em; }
+p.note { color: #666; font-style: italic; }
+""".strip()
+
+_HISTORY_KEYS = ("iter", "energy", "rel_change", "res_t", "res_N", "time", "stage")
+
+
+# --------------------------------------------------------------------------------------------
+# helpers
+
+
+def _esc(x: object) -> str:
+    return html.escape(str(x), quote=True)
+
+
+def _fmt(v: object) -> str:
+    """Readable text for a table cell (numbers with 6 significant digits)."""
+    if isinstance(v, np.generic):
+        v = v.item()
+    if isinstance(v, bool) or v is None:
+        return str(v)
+    if isinstance(v, int):
+        return str(v)
+    if isinstance(v, float):
+        return f"{v:.6g}"
+    if isinstance(v, np.ndarray):
+        if v.size <= 8:
+            return np.array2string(v, precision=6, separator=", ")
+        return f"array of shape {v.shape}, dtype {v.dtype}"
+    if isinstance(v, Mapping):
+        return ", ".join(f"{k}={_fmt(x)}" for k, x in v.items())
+    if isinstance(v, (list, tuple)):
+        inner = ", ".join(_fmt(x) for x in v)
+        return f"[{inner}]" if isinstance(v, list) else f"({inner})"
+    return str(v)
+
+
+def _is_number(v: object) -> bool:
+    return isinstance(v, (int, float, np.integer, np.floating)) and not isinstance(v, bool)
+
+
+def _png_bytes(image: np.ndarray) -> bytes:
+    from matplotlib.image import imsave
+
+    buf = io.BytesIO()
+    imsave(buf, np.asarray(image), format="png")
+    return buf.getvalue()
+
+
+def _data_uri(png: bytes) -> str:
+    return "data:image/png;base64," + base64.b64encode(png).decode("ascii")
+
+
+def _img(png: bytes, alt: str, caption: str | None = None) -> str:
+    cap = f"<figcaption>{_esc(caption)}</figcaption>" if caption else ""
+    return f'<figure><img src="{_data_uri(png)}" alt="{_esc(alt)}">{cap}</figure>'
+
+
+def _table(rows: Sequence[tuple[object, object]], header: tuple[str, str]) -> str:
+    out = ["<table>", f"<tr><th>{_esc(header[0])}</th><th>{_esc(header[1])}</th></tr>"]
+    for k, v in rows:
+        cls = ' class="num"' if _is_number(v) else ""
+        out.append(f"<tr><td>{_esc(k)}</td><td{cls}>{_esc(_fmt(v))}</td></tr>")
+    out.append("</table>")
+    return "\n".join(out)
+
+
+def _check_pair(mesh: object, name: str) -> tuple[np.ndarray, np.ndarray]:
+    try:
+        V, F = mesh  # type: ignore[misc]
+    except (TypeError, ValueError) as exc:
+        raise MeshRepairError(f"{name} must be a (V, F) pair of arrays") from exc
+    V = np.asarray(V, dtype=np.float64)
+    F = np.asarray(F)
+    if V.ndim != 2 or V.shape[1] != 3 or F.ndim != 2 or F.shape[1] != 3 or len(F) == 0:
+        raise MeshRepairError(
+            f"{name} must be (V (nV, 3), F (nF, 3)) with at least one face; got shapes "
+            f"{V.shape} and {F.shape}"
+        )
+    return V, F.astype(np.int64)
+
+
+# --------------------------------------------------------------------------------------------
+# masks
+
+
+def _mask_kind_hint(name: str) -> str | None:
+    n = name.lower()
+    if n.endswith("_e") or "edge" in n:
+        return "edge"
+    if n.endswith("_v") or "vert" in n:
+        return "vertex"
+    if n.endswith("_f") or "face" in n:
+        return "face"
+    return None
+
+
+def _match_mask(
+    name: str, mask: np.ndarray, meshes: Sequence[tuple[str, np.ndarray, np.ndarray]]
+) -> tuple[str, np.ndarray, np.ndarray, str]:
+    """Find the mesh and element kind a mask belongs to (by length; the name breaks ties)."""
+    m = np.asarray(mask).ravel()
+    hint = _mask_kind_hint(name)
+    options = []
+    for label, V, F in meshes:
+        sizes = {"vertex": len(V), "face": len(F), "edge": edge_topology(F, len(V)).n_edges}
+        kinds = [k for k, n in sizes.items() if n == m.shape[0]]
+        if hint in kinds:
+            return label, V, F, hint
+        options += [(label, V, F, k) for k in kinds]
+    if options:
+        return options[0]
+    sizes = "; ".join(
+        f"{label}: {len(V)} vertices, {len(F)} faces, {edge_topology(F, len(V)).n_edges} edges"
+        for label, V, F in meshes
+    )
+    raise MeshRepairError(
+        f"mask {name!r} has {m.shape[0]} entries, matching no element count ({sizes}); pass one "
+        "value per vertex, face or edge (edges in meshrepair.topology.edge_topology order)"
+    )
+
+
+# --------------------------------------------------------------------------------------------
+# convergence plot
+
+
+def _history_arrays(history: Sequence[Mapping]) -> tuple[np.ndarray, str, dict, list]:
+    """x values, x label, numeric series by key and stage labels from the history dicts."""
+    n = len(history)
+
+    def num(key: str) -> np.ndarray:
+        out = np.full(n, np.nan)
+        for i, h in enumerate(history):
+            v = h.get(key) if isinstance(h, Mapping) else None
+            if _is_number(v):
+                out[i] = float(v)
+        return out
+
+    it = num("iter")
+    if np.all(np.isfinite(it)) and (n < 2 or np.all(np.diff(it) > 0)):
+        x, xlabel = it, "iteration"
+    else:
+        x, xlabel = np.arange(n, dtype=np.float64), "iteration (cumulative)"
+    series = {k: num(k) for k in ("energy", "rel_change", "res_t", "res_N")}
+    stages = [
+        str(h.get("stage")) if isinstance(h, Mapping) and h.get("stage") is not None else None
+        for h in history
+    ]
+    return x, xlabel, series, stages
+
+
+def convergence_plot(
+    history: Sequence[Mapping], *, width: int = 1000, height: int = 380
+) -> bytes | None:
+    """PNG of the solver history: log energy and log relative change / residuals vs iteration.
+
+    Parameters
+    ----------
+    history : list of dict
+        One dict per iteration with any of the keys ``'iter'``, ``'energy'``, ``'rel_change'``,
+        ``'res_t'``, ``'res_N'``, ``'time'``, ``'stage'``; missing or non-numeric values are
+        skipped. If ``'iter'`` is missing or not increasing (e.g. restarting per stage) the
+        running index is used. Changes of ``'stage'`` are marked by dashed vertical lines.
+    width, height : int
+        Size in pixels.
+
+    Returns
+    -------
+    bytes or None
+        PNG data, or None when there is nothing numeric to plot.
+    """
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    if not history:
+        return None
+    x, xlabel, series, stages = _history_arrays(history)
+    if not any(np.isfinite(v).any() for v in series.values()):
+        return None
+    dpi = 100
+    fig = Figure(figsize=(width / dpi, height / dpi), dpi=dpi, facecolor="white")
+    FigureCanvasAgg(fig)
+    ax_e, ax_r = fig.subplots(1, 2)
+    panels = (
+        (ax_e, ("energy",), "energy"),
+        (ax_r, ("rel_change", "res_t", "res_N"), "relative change / residual"),
+    )
+    styles = {
+        "energy": ("C0", "-"),
+        "rel_change": ("C1", "-"),
+        "res_t": ("C2", "--"),
+        "res_N": ("C3", ":"),
+    }
+    labels = {"res_t": "res_t", "res_N": "res_N", "rel_change": "rel. change", "energy": "energy"}
+    for ax, keys, ylabel in panels:
+        plotted = False
+        positive_only = True
+        for k in keys:
+            y = series[k]
+            ok = np.isfinite(y)
+            if not ok.any():
+                continue
+            positive_only &= bool(np.all(y[ok] > 0))
+            color, ls = styles[k]
+            ax.plot(x[ok], y[ok], color=color, ls=ls, lw=1.4, label=labels[k],
+                    marker="." if ok.sum() < 40 else None)
+            plotted = True
+        if not plotted:
+            ax.text(0.5, 0.5, "not recorded", ha="center", va="center", transform=ax.transAxes,
+                    color="#888")
+            ax.set_xticks([])
+            ax.set_yticks([])
+            continue
+        ax.set_yscale("log" if positive_only else "symlog")
+        ax.set_xlabel(xlabel)
+        ax.set_ylabel(ylabel)
+        ax.grid(True, which="major", alpha=0.3)
+        if len(keys) > 1:
+            ax.legend(fontsize=8, loc="best")
+        _mark_stages(ax, x, stages)
+    fig.tight_layout()
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png", dpi=dpi, facecolor="white")
+    return buf.getvalue()
+
+
+def _mark_stages(ax, x: np.ndarray, stages: list) -> None:
+    prev = None
+    first = True
+    for xi, st in zip(x, stages, strict=True):
+        if st is None:
+            continue
+        if st != prev:
+            if not first:
+                ax.axvline(xi, color="#777", ls="--", lw=0.9)
+            ax.annotate(st, xy=(xi, 1.0), xycoords=("data", "axes fraction"), xytext=(3, -3),
+                        textcoords="offset points", va="top", fontsize=8, color="#444")
+            first = False
+            prev = st
+
+
+# --------------------------------------------------------------------------------------------
+# the page
+
+
+def write_report(
+    path: str | os.PathLike,
+    *,
+    title: str,
+    output_mesh: tuple[np.ndarray, np.ndarray],
+    input_mesh: tuple[np.ndarray, np.ndarray] | None = None,
+    masks: Mapping[str, np.ndarray] | None = None,
+    metrics: Mapping[str, object] | None = None,
+    history: Sequence[Mapping] | None = None,
+    parameters: Mapping[str, object] | None = None,
+    timings: Mapping[str, object] | None = None,
+    image_size: int = 480,
+    azimuth: float | None = None,
+    elevation: float | None = None,
+) -> Path:
+    """Write a self-contained HTML report (images embedded, no external files or scripts).
+
+    Parameters
+    ----------
+    path : str or path-like
+        Output ``.html`` file (parent directories are created).
+    title : str
+        Page title.
+    output_mesh : (V (nV, 3), F (nF, 3))
+        The repaired mesh.
+    input_mesh : (V (nV0, 3), F (nF0, 3)), optional
+        The mesh before repair; rendered next to the output from the same camera with the same
+        curvature colour range.
+    masks : dict of str to array, optional
+        E.g. ``{"M_E": (nE,) edge mask, "M_V": (nV,) vertex mask}``. Each mask is drawn over the
+        mesh (output first, then input) that has as many edges, vertices or faces as it has
+        entries; a name ending in ``_E``/``_V``/``_F`` settles ties. Edge masks are drawn as dark
+        lines, vertex and face masks as a blue tint. Numeric masks are thresholded at 0.5.
+    metrics : dict of str to number, optional
+        Shown in a table (numbers with 6 significant digits).
+    history : list of dict, optional
+        Solver iterations (see :func:`convergence_plot`).
+    parameters, timings : dict, optional
+        Shown in tables; ``timings`` values are seconds.
+    image_size : int
+        Size in pixels of each mesh panel.
+    azimuth, elevation : float, optional
+        Camera angles for every render (see :func:`meshrepair.render.render_mesh`).
+
+    Returns
+    -------
+    Path
+        The written file.
+    """
+    from . import render
+
+    out = _check_pair(output_mesh, "output_mesh")
+    inp = _check_pair(input_mesh, "input_mesh") if input_mesh is not None else None
+    size = int(image_size)
+    if size < 64:
+        raise MeshRepairError(f"image_size must be at least 64 pixels, got {image_size}")
+    cam = {"azimuth": azimuth, "elevation": elevation}
+    parts: list[str] = []
+
+    # --- renders
+    meshes = [("input", *inp)] if inp is not None else []
+    meshes.append(("output", *out))
+    parts.append("<h2>Meshes</h2>")
+    rows = []
+    for label, V, F in meshes:
+        rows.append((f"{label}: vertices / faces", f"{len(V)} / {len(F)}"))
+    parts.append(_table(rows, ("mesh", "size")))
+    fig = render.compare_figure(
+        [(V, F) for _, V, F in meshes],
+        [label for label, _, _ in meshes],
+        width=size, height=size, **cam,
+    )  # fmt: skip
+    parts.append(_img(_png_bytes(fig), "input and output renders",
+                      "Discrete mean curvature, same camera and colour range."))
+
+    # --- masks
+    if masks:
+        parts.append("<h2>Masks</h2>")
+        search = [meshes[-1]] + meshes[:-1]  # output first
+        for name, mask in masks.items():
+            label, V, F, kind = _match_mask(str(name), mask, search)
+            m = np.asarray(mask).ravel()
+            on = int(np.count_nonzero(m > 0.5) if m.dtype != bool else np.count_nonzero(m))
+            kw = {"edge_mask": m} if kind == "edge" else {"region_mask": m}
+            img = render.render_mesh(
+                V, F, color_by="none", shading="smooth", width=size, height=size,
+                colorbar=False, title=str(name), **kw, **cam,
+            )  # fmt: skip
+            parts.append(_img(_png_bytes(img), f"mask {name}",
+                              f"{name}: {on} of {m.shape[0]} {kind}s on the {label} mesh"))
+
+    # --- metrics
+    parts.append("<h2>Metrics</h2>")
+    if metrics:
+        parts.append(_table(list(metrics.items()), ("metric", "value")))
+    else:
+        parts.append('<p class="note">No metrics given.</p>')
+
+    # --- convergence
+    parts.append("<h2>Convergence</h2>")
+    png = convergence_plot(list(history)) if history else None
+    if png is not None:
+        parts.append(_img(png, "convergence plot",
+                          f"{len(history)} iterations; dashed lines mark stage switches."))
+        parts.append(_history_summary(history))
+    else:
+        parts.append('<p class="note">No convergence history recorded.</p>')
+
+    # --- parameters and timings
+    parts.append("<h2>Parameters</h2>")
+    if parameters:
+        parts.append(_table(list(parameters.items()), ("parameter", "value")))
+    else:
+        parts.append('<p class="note">No parameters given.</p>')
+    parts.append("<h2>Timings</h2>")
+    if timings:
+        rows = [(k, v) for k, v in timings.items()]
+        parts.append(_table(rows, ("step", "seconds")))
+    else:
+        parts.append('<p class="note">No timings given.</p>')
+
+    stamp = datetime.now(timezone.utc).strftime("%Y-%m-%d %H:%M UTC")
+    page = "\n".join(
+        [
+            "<!DOCTYPE html>",
+            '<html lang="en">',
+            "<head>",
+            '<meta charset="utf-8">',
+            f"<title>{_esc(title)}</title>",
+            f"<style>\n{_CSS}\n</style>",
+            "</head>",
+            "<body>",
+            f"<h1>{_esc(title)}</h1>",
+            f'<p class="note">Generated by meshrepair on {_esc(stamp)}.</p>',
+            *parts,
+            "</body>",
+            "</html>",
+            "",
+        ]
+    )
+    p = Path(path)
+    p.parent.mkdir(parents=True, exist_ok=True)
+    p.write_text(page, encoding="utf-8")
+    log.info("wrote report %s (%.1f kB)", p, len(page) / 1024)
+    return p
+
+
+def _history_summary(history: Sequence[Mapping]) -> str:
+    """Table with the first and last recorded values of each history key."""
+    rows = []
+    for key in _HISTORY_KEYS:
+        vals = [h.get(key) for h in history if isinstance(h, Mapping) and h.get(key) is not None]
+        if not vals:
+            continue
+        if key == "stage":
+            seen: list = []
+            for v in vals:
+                if not seen or seen[-1] != v:
+                    seen.append(v)
+            rows.append(("stages", " → ".join(str(s) for s in seen)))
+            continue
+        first, last = vals[0], vals[-1]
+        if _is_number(last) and not math.isfinite(float(last)):
+            last = str(last)
+        rows.append((f"{key} (first → last)", f"{_fmt(first)} → {_fmt(last)}"))
+    return _table(rows, ("history", "value")) if rows else ""
