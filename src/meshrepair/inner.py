@@ -16,6 +16,8 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.sparse as sp
 
+from . import _kernels as _k
+
 INNER_SOLVERS = ("armijo", "gd", "heavy_ball", "lbfgs", "bfgs")
 
 
@@ -34,9 +36,11 @@ class VSubproblem:
         self.F = np.asarray(F, dtype=np.int64)
         nF = len(self.F)
         self.nV = int(n_vertices)
-        cols = np.arange(3 * nF)
-        rows = self.F.T.ravel()  # corner k of face m -> column k*nF + m
-        self.S = sp.csr_matrix((np.ones(3 * nF), (rows, cols)), shape=(self.nV, 3 * nF))
+        self.S = None
+        if not _k.HAVE_NUMBA:  # corner k of face m -> column k*nF + m, for the numpy scatter
+            cols = np.arange(3 * nF)
+            rows = self.F.T.ravel()
+            self.S = sp.csr_matrix((np.ones(3 * nF), (rows, cols)), shape=(self.nV, 3 * nF))
         self.free = None if fixed is None or not np.any(fixed) else ~np.asarray(fixed, bool)
         self.V0 = np.zeros((self.nV, 3))
         self.wfid = np.zeros(self.nV)
@@ -53,34 +57,13 @@ class VSubproblem:
     def energy(self, V: np.ndarray) -> float:
         """``J_V(V)`` up to a constant."""
         self.n_energy += 1
-        F = self.F
-        p0 = V[F[:, 0]]
-        c = np.cross(V[F[:, 1]] - p0, V[F[:, 2]] - p0)
-        q = np.sqrt(np.einsum("ij,ij->i", c, c))
-        q = np.maximum(q, 1e-300)
-        e = float(np.einsum("ij,ij->", self.z, c / q[:, None]))
-        d = V - self.V0
-        return e + 0.5 * float(np.einsum("i,ij,ij->", self.wfid, d, d))
+        return _k.venergy(V, self.F, self.z, self.V0, self.wfid)
 
     def energy_grad(self, V: np.ndarray) -> tuple[float, np.ndarray]:
         """``(J_V(V), ∇J_V(V))`` with the gradient (28), shape ``(nV, 3)``."""
         self.n_energy += 1
         self.n_grad += 1
-        F = self.F
-        p0, p1, p2 = V[F[:, 0]], V[F[:, 1]], V[F[:, 2]]
-        c = np.cross(p1 - p0, p2 - p0)
-        q = np.sqrt(np.einsum("ij,ij->i", c, c))
-        q = np.maximum(q, 1e-300)
-        n = c / q[:, None]
-        z = self.z
-        zn = np.einsum("ij,ij->i", z, n)
-        e = float(zn.sum())
-        g = (z - zn[:, None] * n) / q[:, None]
-        contrib = np.concatenate([np.cross(g, p2 - p1), np.cross(g, p0 - p2), np.cross(g, p1 - p0)])
-        grad = self.S @ contrib
-        d = V - self.V0
-        e += 0.5 * float(np.einsum("i,ij,ij->", self.wfid, d, d))
-        grad += self.wfid[:, None] * d
+        e, grad = _k.venergy_grad(V, self.F, self.z, self.V0, self.wfid, self.S)
         if self.free is not None:
             grad[~self.free] = 0.0
         return e, grad

@@ -27,10 +27,10 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from .geometry import edge_lengths, face_normals, sharp_edge_mask
+from . import _kernels as _k
+from .geometry import sharp_edge_mask
 from .inner import INNER_SOLVERS, InnerState, VSubproblem, run_inner
-from .linear import N_SOLVERS, solve_normals
-from .operators import apply_gradient, apply_gradient_transpose, normal_system_matrix
+from .linear import N_SOLVERS, NormalSystem, solve_normals
 from .penalties import mc_penalty, t_update
 from .relax import TangentialRelaxer
 from .topology import Topology, edge_topology
@@ -104,7 +104,7 @@ class SolverOptions:
     inner_solver: str = "armijo"
     inner_iters: int = 3
     n_solver: str = "auto"
-    n_rtol: float = 1e-5
+    n_rtol: float = 1e-4
     mask_update_every: int = 0
     mask_source: str = "N"
     min_feature_edges: int = 1
@@ -214,6 +214,12 @@ class ADMMSolver:
         self.fixed = None if fixed is None else np.asarray(fixed, dtype=bool)
         self.vsub = VSubproblem(self.F, nV, fixed=self.fixed)
         self.relaxer = TangentialRelaxer(self.topo, self.fixed)
+        # only interior edges carry a normal jump: t, rho1 live on them
+        self.ie = np.flatnonzero(self.topo.interior)
+        self.E_int = np.ascontiguousarray(self.topo.edges[self.ie])
+        self.fa = np.ascontiguousarray(self.topo.edge_faces[self.ie, 0])
+        self.fb = np.ascontiguousarray(self.topo.edge_faces[self.ie, 1])
+        self.nsys = NormalSystem(self.fa, self.fb, self.topo.n_faces)
 
     # -- masks ---------------------------------------------------------------------------------
     def _mask(self, mode: str, normals: np.ndarray, given: np.ndarray | None) -> np.ndarray:
@@ -233,12 +239,13 @@ class ADMMSolver:
         return m
 
     def energy(self, V: np.ndarray, V0: np.ndarray, sharp: np.ndarray, a: float) -> float:
-        """Energy (6) at ``V`` (normalised units) for mask ``sharp`` and non-convexity ``a``."""
+        """Energy (6) at ``V`` (normalised units) for mask ``sharp`` (per edge) and ``a``."""
         o = self.options
-        Nv = face_normals(V, self.F)
-        t = apply_gradient(Nv, edge_lengths(V, self.topo.edges), self.topo)
+        Nv = _k.face_normals(V, self.F)
+        t = _k.grad_edges(Nv, _k.edge_lengths(V, self.E_int), self.fa, self.fb)
         nt = np.sqrt(np.einsum("ij,ij->i", t, t))
-        reg = np.where(sharp, mc_penalty(nt, a), o.willmore_weight * nt**2).sum()
+        sh = sharp[self.ie]
+        reg = np.where(sh, mc_penalty(nt, a), o.willmore_weight * nt**2).sum()
         d = V - V0
         fid = 0.5 * o.lam * float(np.einsum("i,ij,ij->", self.M_V**2, d, d))
         return float(reg + fid)
@@ -267,17 +274,19 @@ class ADMMSolver:
         used = np.zeros(topo.n_vertices, bool)
         used[self.F.ravel()] = True
         center = Vi[used].mean(axis=0)
-        scale = float(edge_lengths(Vi, topo.edges).mean())
+        scale = float(_k.edge_lengths(Vi, topo.edges).mean())
         if not scale > 0:
             from .errors import MeshRepairError
 
             raise MeshRepairError("all edges have zero length; the mesh has no extent")
-        X0 = (V0 - center) / scale
-        V = (Vi - center) / scale
+        X0 = np.ascontiguousarray((V0 - center) / scale)
+        V = np.ascontiguousarray((Vi - center) / scale)
         fid = o.lam * self.M_V**2
+        F = self.F
+        fa, fb, E_int, nF = self.fa, self.fb, self.E_int, topo.n_faces
 
-        N = face_normals(V, self.F)
-        rho1 = np.zeros((topo.n_edges, 3))
+        N = _k.face_normals(V, F)
+        rho1 = np.zeros((len(self.ie), 3))
         rho2 = np.zeros((topo.n_faces, 3))
         state = InnerState(step=1e-2)
         history: list[dict] = []
@@ -288,7 +297,7 @@ class ADMMSolver:
         try:
             for si, stage in enumerate(o.stages):
                 last = si == len(o.stages) - 1
-                src = N if o.mask_source == "N" else face_normals(V, self.F)
+                src = N if o.mask_source == "N" else _k.face_normals(V, F)
                 sharp = self._mask(stage.mask, src, given_mask)
                 beta1 = stage.beta1 if (sharp.any() or stage.mask == "all") else max(
                     stage.beta1, stage.eps * 2.0 * o.willmore_weight)
@@ -300,20 +309,23 @@ class ADMMSolver:
                 for j in range(stage.max_iter):
                     if (stage.mask == "adaptive" and o.mask_update_every and j > 0
                             and j % o.mask_update_every == 0):
-                        src = N if o.mask_source == "N" else face_normals(V, self.F)
+                        src = N if o.mask_source == "N" else _k.face_normals(V, F)
                         sharp = self._mask("adaptive", src, given_mask)
-                    l = edge_lengths(V, topo.edges)
+                    sh = sharp[self.ie]
+                    l = _k.edge_lengths(V, E_int)
                     # (17) t-update
-                    DN = apply_gradient(N, l, topo)
-                    t = t_update(DN, rho1, sharp, a=stage.a, beta1=beta1,
+                    DN = _k.grad_edges(N, l, fa, fb)
+                    t = t_update(DN, rho1, sh, a=stage.a, beta1=beta1,
                                  willmore_weight=o.willmore_weight)
                     # (18) N-update via (25), then normalise
                     c = beta2 / beta1
-                    A = normal_system_matrix(l, topo, c)
-                    Nv = face_normals(V, self.F)
-                    B = c * Nv + rho2 / beta1 + apply_gradient_transpose(t - rho1 / beta1, l, topo)
-                    N, _ = solve_normals(A, B, N, method=o.n_solver, rtol=o.n_rtol)
-                    nn = np.linalg.norm(N, axis=1, keepdims=True)
+                    Nv = _k.face_normals(V, F)
+                    B = c * Nv + rho2 / beta1 + _k.grad_edges_T(t - rho1 / beta1, l, fa, fb, nF)
+                    if o.n_solver == "direct":
+                        N, _ = solve_normals(self.nsys.matrix(l * l, c), B, N, method="direct")
+                    else:
+                        N, _ = self.nsys.solve_cg(l * l, c, B, N, rtol=o.n_rtol)
+                    nn = np.sqrt(np.einsum("ij,ij->i", N, N))[:, None]
                     N = np.divide(N, nn, out=Nv.copy(), where=nn > 0)
                     # (19) V-update: inner solver on (26), warm-started
                     self.vsub.set(X0, fid, rho2 - beta2 * N)
@@ -321,11 +333,9 @@ class ADMMSolver:
                     if stage.relax > 0:
                         Vn = self.relaxer.step(Vn, sharp, stage.relax)
                     # (20)-(21) multipliers
-                    DN_new = apply_gradient(N, l, topo)
-                    r_t = t - DN_new
-                    rho1 = rho1 - beta1 * r_t
-                    Nv_new = face_normals(Vn, self.F)
-                    r_n = N - Nv_new
+                    r_t = t - _k.grad_edges(N, l, fa, fb)
+                    rho1 -= beta1 * r_t
+                    r_n = N - _k.face_normals(Vn, F)
                     rho2 = rho2 - beta2 * r_n
                     rel = float(np.linalg.norm(Vn - V) / max(np.linalg.norm(V), 1e-300))
                     V = Vn

@@ -1,0 +1,321 @@
+"""Fused per-element kernels of the hot loop, compiled with numba when it is installed.
+
+Each kernel has a pure-numpy twin with identical results (checked in ``tests/test_kernels.py``);
+the numpy path is used when numba is missing or ``MESHREPAIR_NO_NUMBA=1`` is set. Profiling showed
+the V-subproblem energy/gradient (gather, cross, normalise, dot, scatter over faces) and the
+edge gathers dominating an ADMM iteration; fusing them removes the temporaries (see
+docs/performance.md).
+"""
+
+from __future__ import annotations
+
+import os
+
+import numpy as np
+
+try:  # pragma: no cover - exercised through both paths in tests
+    if os.environ.get("MESHREPAIR_NO_NUMBA", "") not in ("", "0"):
+        raise ImportError
+    from numba import njit
+
+    HAVE_NUMBA = True
+except ImportError:  # pragma: no cover
+    HAVE_NUMBA = False
+
+
+# ---------------------------------------------------------------------------------------------
+# numpy reference implementations
+
+
+def _np_venergy(V, F, z, V0, wfid):
+    p0 = V[F[:, 0]]
+    c = np.cross(V[F[:, 1]] - p0, V[F[:, 2]] - p0)
+    q = np.maximum(np.sqrt(np.einsum("ij,ij->i", c, c)), 1e-300)
+    d = V - V0
+    return float(np.einsum("ij,ij->", z, c / q[:, None])) + 0.5 * float(
+        np.einsum("i,ij,ij->", wfid, d, d))
+
+
+def _np_venergy_grad(V, F, z, V0, wfid, S):
+    p0, p1, p2 = V[F[:, 0]], V[F[:, 1]], V[F[:, 2]]
+    c = np.cross(p1 - p0, p2 - p0)
+    q = np.maximum(np.sqrt(np.einsum("ij,ij->i", c, c)), 1e-300)
+    n = c / q[:, None]
+    zn = np.einsum("ij,ij->i", z, n)
+    g = (z - zn[:, None] * n) / q[:, None]
+    contrib = np.concatenate([np.cross(g, p2 - p1), np.cross(g, p0 - p2), np.cross(g, p1 - p0)])
+    grad = S @ contrib
+    d = V - V0
+    grad += wfid[:, None] * d
+    return float(zn.sum()) + 0.5 * float(np.einsum("i,ij,ij->", wfid, d, d)), grad
+
+
+def _np_face_normals(V, F):
+    c = np.cross(V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]])
+    n2 = np.sqrt(np.einsum("ij,ij->i", c, c))
+    out = np.zeros_like(c)
+    ok = n2 > 0
+    out[ok] = c[ok] / n2[ok, None]
+    return out
+
+
+def _np_edge_lengths(V, E):
+    d = V[E[:, 1]] - V[E[:, 0]]
+    return np.sqrt(np.einsum("ij,ij->i", d, d))
+
+
+def _np_grad_edges(N, l, fa, fb):
+    return l[:, None] * (N[fa] - N[fb])
+
+
+def _np_grad_edges_T(t, l, fa, fb, nF):
+    w = l[:, None] * t
+    out = np.empty((nF, t.shape[1]))
+    for k in range(t.shape[1]):
+        out[:, k] = np.bincount(fa, w[:, k], nF) - np.bincount(fb, w[:, k], nF)
+    return out
+
+
+# ---------------------------------------------------------------------------------------------
+# numba kernels
+
+if HAVE_NUMBA:
+
+    @njit(cache=True, fastmath=False)
+    def _nb_venergy(V, F, z, V0, wfid):  # pragma: no cover - compiled
+        e = 0.0
+        for m in range(F.shape[0]):
+            i, j, k = F[m, 0], F[m, 1], F[m, 2]
+            ax = V[j, 0] - V[i, 0]
+            ay = V[j, 1] - V[i, 1]
+            az = V[j, 2] - V[i, 2]
+            bx = V[k, 0] - V[i, 0]
+            by = V[k, 1] - V[i, 1]
+            bz = V[k, 2] - V[i, 2]
+            cx = ay * bz - az * by
+            cy = az * bx - ax * bz
+            cz = ax * by - ay * bx
+            q = np.sqrt(cx * cx + cy * cy + cz * cz)
+            if q < 1e-300:
+                q = 1e-300
+            e += (z[m, 0] * cx + z[m, 1] * cy + z[m, 2] * cz) / q
+        f = 0.0
+        for v in range(V.shape[0]):
+            w = wfid[v]
+            if w != 0.0:
+                dx = V[v, 0] - V0[v, 0]
+                dy = V[v, 1] - V0[v, 1]
+                dz = V[v, 2] - V0[v, 2]
+                f += w * (dx * dx + dy * dy + dz * dz)
+        return e + 0.5 * f
+
+    @njit(cache=True, fastmath=False)
+    def _nb_venergy_grad(V, F, z, V0, wfid, grad):  # pragma: no cover - compiled
+        nV = V.shape[0]
+        e = 0.0
+        f = 0.0
+        for v in range(nV):
+            w = wfid[v]
+            dx = V[v, 0] - V0[v, 0]
+            dy = V[v, 1] - V0[v, 1]
+            dz = V[v, 2] - V0[v, 2]
+            grad[v, 0] = w * dx
+            grad[v, 1] = w * dy
+            grad[v, 2] = w * dz
+            f += w * (dx * dx + dy * dy + dz * dz)
+        for m in range(F.shape[0]):
+            i, j, k = F[m, 0], F[m, 1], F[m, 2]
+            p0x, p0y, p0z = V[i, 0], V[i, 1], V[i, 2]
+            p1x, p1y, p1z = V[j, 0], V[j, 1], V[j, 2]
+            p2x, p2y, p2z = V[k, 0], V[k, 1], V[k, 2]
+            ax, ay, az = p1x - p0x, p1y - p0y, p1z - p0z
+            bx, by, bz = p2x - p0x, p2y - p0y, p2z - p0z
+            cx = ay * bz - az * by
+            cy = az * bx - ax * bz
+            cz = ax * by - ay * bx
+            q = np.sqrt(cx * cx + cy * cy + cz * cz)
+            if q < 1e-300:
+                q = 1e-300
+            nx, ny, nz = cx / q, cy / q, cz / q
+            zx, zy, zz = z[m, 0], z[m, 1], z[m, 2]
+            zn = zx * nx + zy * ny + zz * nz
+            e += zn
+            gx = (zx - zn * nx) / q
+            gy = (zy - zn * ny) / q
+            gz = (zz - zn * nz) / q
+            # corner i: g x (p2 - p1)
+            ux, uy, uz = p2x - p1x, p2y - p1y, p2z - p1z
+            grad[i, 0] += gy * uz - gz * uy
+            grad[i, 1] += gz * ux - gx * uz
+            grad[i, 2] += gx * uy - gy * ux
+            # corner j: g x (p0 - p2)
+            ux, uy, uz = p0x - p2x, p0y - p2y, p0z - p2z
+            grad[j, 0] += gy * uz - gz * uy
+            grad[j, 1] += gz * ux - gx * uz
+            grad[j, 2] += gx * uy - gy * ux
+            # corner k: g x (p1 - p0)
+            grad[k, 0] += gy * az - gz * ay
+            grad[k, 1] += gz * ax - gx * az
+            grad[k, 2] += gx * ay - gy * ax
+        return e + 0.5 * f
+
+    @njit(cache=True)
+    def _nb_face_normals(V, F):  # pragma: no cover - compiled
+        out = np.zeros((F.shape[0], 3))
+        for m in range(F.shape[0]):
+            i, j, k = F[m, 0], F[m, 1], F[m, 2]
+            ax = V[j, 0] - V[i, 0]
+            ay = V[j, 1] - V[i, 1]
+            az = V[j, 2] - V[i, 2]
+            bx = V[k, 0] - V[i, 0]
+            by = V[k, 1] - V[i, 1]
+            bz = V[k, 2] - V[i, 2]
+            cx = ay * bz - az * by
+            cy = az * bx - ax * bz
+            cz = ax * by - ay * bx
+            q = np.sqrt(cx * cx + cy * cy + cz * cz)
+            if q > 0:
+                out[m, 0] = cx / q
+                out[m, 1] = cy / q
+                out[m, 2] = cz / q
+        return out
+
+    @njit(cache=True)
+    def _nb_edge_lengths(V, E):  # pragma: no cover - compiled
+        out = np.empty(E.shape[0])
+        for e in range(E.shape[0]):
+            a, b = E[e, 0], E[e, 1]
+            dx = V[b, 0] - V[a, 0]
+            dy = V[b, 1] - V[a, 1]
+            dz = V[b, 2] - V[a, 2]
+            out[e] = np.sqrt(dx * dx + dy * dy + dz * dz)
+        return out
+
+    @njit(cache=True)
+    def _nb_grad_edges(N, l, fa, fb):  # pragma: no cover - compiled
+        out = np.empty((fa.shape[0], 3))
+        for e in range(fa.shape[0]):
+            a, b, w = fa[e], fb[e], l[e]
+            out[e, 0] = w * (N[a, 0] - N[b, 0])
+            out[e, 1] = w * (N[a, 1] - N[b, 1])
+            out[e, 2] = w * (N[a, 2] - N[b, 2])
+        return out
+
+    @njit(cache=True)
+    def _nb_grad_edges_T(t, l, fa, fb, nF):  # pragma: no cover - compiled
+        out = np.zeros((nF, 3))
+        for e in range(fa.shape[0]):
+            a, b, w = fa[e], fb[e], l[e]
+            for c in range(3):
+                x = w * t[e, c]
+                out[a, c] += x
+                out[b, c] -= x
+        return out
+
+
+if HAVE_NUMBA:
+
+    @njit(cache=True)
+    def _nb_lap_matvec(fa, fb, w, diag, X, out):  # pragma: no cover - compiled
+        for f in range(X.shape[0]):
+            for c in range(3):
+                out[f, c] = diag[f] * X[f, c]
+        for e in range(fa.shape[0]):
+            a, b, we = fa[e], fb[e], w[e]
+            for c in range(3):
+                out[a, c] -= we * X[b, c]
+                out[b, c] -= we * X[a, c]
+
+    @njit(cache=True)
+    def _nb_pcg(fa, fb, w, diag, B, X, rtol, maxiter):  # pragma: no cover - compiled
+        # CG on the Kronecker system (A ⊗ I3) vec(X) = vec(B): scalar alpha/beta from Frobenius
+        # products, so the iterates are exactly equivariant under rotations of the columns.
+        n = B.shape[0]
+        R = np.empty_like(B)
+        AP = np.empty_like(B)
+        _nb_lap_matvec(fa, fb, w, diag, X, AP)
+        bn = 0.0
+        for f in range(n):
+            for c in range(3):
+                R[f, c] = B[f, c] - AP[f, c]
+                bn += B[f, c] * B[f, c]
+        Z = np.empty_like(B)
+        rz = 0.0
+        rn = 0.0
+        for f in range(n):
+            for c in range(3):
+                Z[f, c] = R[f, c] / diag[f]
+                rz += R[f, c] * Z[f, c]
+                rn += R[f, c] * R[f, c]
+        P = Z.copy()
+        tol2 = rtol * rtol * max(bn, 1e-300)
+        it = 0
+        while it < maxiter and rn > tol2:
+            _nb_lap_matvec(fa, fb, w, diag, P, AP)
+            pap = 0.0
+            for f in range(n):
+                for c in range(3):
+                    pap += P[f, c] * AP[f, c]
+            if pap <= 0.0:
+                break
+            alpha = rz / pap
+            rz_new = 0.0
+            rn = 0.0
+            for f in range(n):
+                for c in range(3):
+                    X[f, c] += alpha * P[f, c]
+                    R[f, c] -= alpha * AP[f, c]
+                    Z[f, c] = R[f, c] / diag[f]
+                    rz_new += R[f, c] * Z[f, c]
+                    rn += R[f, c] * R[f, c]
+            beta = rz_new / rz if rz > 0 else 0.0
+            rz = rz_new
+            for f in range(n):
+                for c in range(3):
+                    P[f, c] = Z[f, c] + beta * P[f, c]
+            it += 1
+        return it
+
+
+def venergy(V, F, z, V0, wfid):
+    """Energy (26) up to a constant (see :class:`meshrepair.inner.VSubproblem`)."""
+    if HAVE_NUMBA:
+        return float(_nb_venergy(V, F, z, V0, wfid))
+    return _np_venergy(V, F, z, V0, wfid)
+
+
+def venergy_grad(V, F, z, V0, wfid, S=None):
+    """Energy (26) and its gradient (28); ``S`` is the corner scatter matrix (numpy path)."""
+    if HAVE_NUMBA:
+        grad = np.empty_like(V)
+        e = _nb_venergy_grad(V, F, z, V0, wfid, grad)
+        return float(e), grad
+    return _np_venergy_grad(V, F, z, V0, wfid, S)
+
+
+def face_normals(V, F):
+    """Unit face normals, zero rows for degenerate faces, shape ``(nF, 3)``."""
+    if HAVE_NUMBA:
+        return _nb_face_normals(V, F)
+    return _np_face_normals(V, F)
+
+
+def edge_lengths(V, E):
+    """Lengths of edges ``E (nE, 2)``."""
+    if HAVE_NUMBA:
+        return _nb_edge_lengths(V, E)
+    return _np_edge_lengths(V, E)
+
+
+def grad_edges(N, l, fa, fb):
+    """``l_e (N[fa_e] - N[fb_e])`` for interior edges, shape ``(nEi, 3)``."""
+    if HAVE_NUMBA:
+        return _nb_grad_edges(N, l, fa, fb)
+    return _np_grad_edges(N, l, fa, fb)
+
+
+def grad_edges_T(t, l, fa, fb, nF):
+    """Transpose of :func:`grad_edges`, shape ``(nF, 3)``."""
+    if HAVE_NUMBA:
+        return _nb_grad_edges_T(t, l, fa, fb, nF)
+    return _np_grad_edges_T(t, l, fa, fb, nF)
