@@ -73,7 +73,7 @@ def test_numpy_fallback_runs_and_agrees(tmp_path):
         "m = trimesh.creation.icosphere(2)\n"
         "V = add_noise(np.asarray(m.vertices), m.faces, 0.2, seed=1)\n"
         "r = denoise(V, m.faces, robust_iters=5, feature_iters=5)\n"
-        "np.save(%r, r.V)\n" % str(tmp_path / "np.npy")
+        f"np.save({str(tmp_path / 'np.npy')!r}, r.V)\n"
     )
     env = dict(os.environ, MESHREPAIR_NO_NUMBA="1")
     subprocess.run([sys.executable, "-c", code], check=True, env=env)

@@ -155,7 +155,7 @@ def denoise(
         if int(val) != val or val < 0:
             raise MeshRepairError(f"{nm} must be a non-negative integer, got {val}")
     topo = edge_topology(F, len(V))
-    gamma = estimate_noise(V, F)
+    gamma = estimate_noise(V, F, topo)
     lam_used = lambda_from_noise(gamma) if lam is None else float(lam)
     if stages is None:
         stages = default_stages(robust_iters=int(robust_iters), feature_iters=int(feature_iters),

@@ -82,12 +82,15 @@ def sharp_edge_mask(N: np.ndarray, topo: Topology, th: float = 30.0) -> np.ndarr
     return (dihedral_angles(N, topo) > th).astype(np.float64)
 
 
+def scatter_rows(index: np.ndarray, values: np.ndarray, n: int) -> np.ndarray:
+    """``out[index[i]] += values[i]`` for ``values (m, k)``; returns ``(n, k)`` (fast bincount)."""
+    return np.stack([np.bincount(index, values[:, j], n) for j in range(values.shape[1])], axis=1)
+
+
 def vertex_normals(V: np.ndarray, F: np.ndarray) -> np.ndarray:
     """Area-weighted unit vertex normals, shape ``(nV, 3)``."""
     c = np.cross(V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]])
-    vn = np.zeros_like(V, dtype=np.float64)
-    for k in range(3):
-        np.add.at(vn, F[:, k], c)
+    vn = scatter_rows(F.ravel(), np.repeat(c, 3, axis=0), len(V))
     n = np.linalg.norm(vn, axis=1, keepdims=True)
     return np.divide(vn, n, out=np.zeros_like(vn), where=n > 0)
 

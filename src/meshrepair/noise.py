@@ -9,8 +9,8 @@ from __future__ import annotations
 import numpy as np
 
 from .errors import MeshRepairError
-from .geometry import mean_edge_length, vertex_normals
-from .topology import edge_topology
+from .geometry import edge_lengths, mean_edge_length, scatter_rows, vertex_normals
+from .topology import Topology, edge_topology
 
 
 def add_noise(V: np.ndarray, F: np.ndarray, gamma: float, *, direction: str = "normal",
@@ -46,7 +46,7 @@ def add_noise(V: np.ndarray, F: np.ndarray, gamma: float, *, direction: str = "n
     return V + eta[:, None] * d
 
 
-def estimate_noise(V: np.ndarray, F: np.ndarray) -> float:
+def estimate_noise(V: np.ndarray, F: np.ndarray, topo: Topology | None = None) -> float:
     """Estimate the noise level γ (in mean edge lengths) from the mesh alone.
 
     Robust estimate: the median absolute deviation of the normal component of the umbrella
@@ -62,13 +62,12 @@ def estimate_noise(V: np.ndarray, F: np.ndarray) -> float:
     """
     V = np.asarray(V, dtype=np.float64)
     F = np.asarray(F, dtype=np.int64)
-    topo = edge_topology(F, len(V))
+    if topo is None:
+        topo = edge_topology(F, len(V))
     e = topo.edges
     nV = len(V)
     deg = np.bincount(e.ravel(), minlength=nV).astype(float)
-    S = np.zeros((nV, 3))
-    np.add.at(S, e[:, 0], V[e[:, 1]])
-    np.add.at(S, e[:, 1], V[e[:, 0]])
+    S = scatter_rows(np.r_[e[:, 0], e[:, 1]], np.r_[V[e[:, 1]], V[e[:, 0]]], nV)
     ok = deg > 0
     # skip boundary vertices: their umbrella is one-sided
     bnd = np.zeros(nV, bool)
@@ -80,4 +79,4 @@ def estimate_noise(V: np.ndarray, F: np.ndarray) -> float:
     n = vertex_normals(V, F)[ok]
     h = np.einsum("ij,ij->i", lap, n) / np.sqrt(1.0 + 1.0 / deg[ok])
     mad = 1.4826 * np.median(np.abs(h - np.median(h)))
-    return float(mad / mean_edge_length(V, F))
+    return float(mad / edge_lengths(V, topo.edges).mean())

@@ -94,6 +94,13 @@ def t_update(
     (nE, 3)
     """
     sharp = np.asarray(sharp, dtype=bool)
+    if sharp.any() and not beta1 > a:
+        raise ValueError(f"beta1 must exceed a on sharp edges (rule (24)): beta1={beta1}, a={a}")
+    from . import _kernels as _k
+
+    if _k.HAVE_NUMBA and DN.dtype == np.float64 and rho1.dtype == np.float64:
+        return _k._nb_t_update(np.ascontiguousarray(DN), np.ascontiguousarray(rho1), sharp,
+                               float(a), float(beta1), float(willmore_weight))
     base = beta1 * DN + rho1
     t = base / (beta1 + 2.0 * willmore_weight)
     if sharp.any():

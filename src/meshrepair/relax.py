@@ -98,9 +98,10 @@ def locally_flipped_faces(V: np.ndarray, topo: Topology) -> np.ndarray:
     N = face_normals(V, topo.faces)
     ef = topo.edge_faces
     inner = ef[:, 1] >= 0
-    S = np.zeros_like(N)
-    np.add.at(S, ef[inner, 0], N[ef[inner, 1]])
-    np.add.at(S, ef[inner, 1], N[ef[inner, 0]])
+    from .geometry import scatter_rows
+
+    a, b = ef[inner, 0], ef[inner, 1]
+    S = scatter_rows(np.r_[a, b], np.r_[N[b], N[a]], len(N))
     return np.einsum("ij,ij->i", N, S) <= 0
 
 

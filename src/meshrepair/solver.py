@@ -104,7 +104,7 @@ class SolverOptions:
     inner_solver: str = "armijo"
     inner_iters: int = 3
     n_solver: str = "auto"
-    n_rtol: float = 1e-4
+    n_rtol: float = 1e-3
     mask_update_every: int = 0
     mask_source: str = "N"
     min_feature_edges: int = 1
@@ -286,6 +286,8 @@ class ADMMSolver:
         fa, fb, E_int, nF = self.fa, self.fb, self.E_int, topo.n_faces
 
         N = _k.face_normals(V, F)
+        Nv = N.copy()
+        l = _k.edge_lengths(V, E_int)
         rho1 = np.zeros((len(self.ie), 3))
         rho2 = np.zeros((topo.n_faces, 3))
         state = InnerState(step=1e-2)
@@ -312,41 +314,39 @@ class ADMMSolver:
                         src = N if o.mask_source == "N" else _k.face_normals(V, F)
                         sharp = self._mask("adaptive", src, given_mask)
                     sh = sharp[self.ie]
-                    l = _k.edge_lengths(V, E_int)
                     # (17) t-update
                     DN = _k.grad_edges(N, l, fa, fb)
                     t = t_update(DN, rho1, sh, a=stage.a, beta1=beta1,
                                  willmore_weight=o.willmore_weight)
                     # (18) N-update via (25), then normalise
                     c = beta2 / beta1
-                    Nv = _k.face_normals(V, F)
-                    B = c * Nv + rho2 / beta1 + _k.grad_edges_T(t - rho1 / beta1, l, fa, fb, nF)
+                    B = _k.rhs(c, Nv, rho2, beta1, t, rho1, l, fa, fb)
                     if o.n_solver == "direct":
                         N, _ = solve_normals(self.nsys.matrix(l * l, c), B, N, method="direct")
                     else:
                         N, _ = self.nsys.solve_cg(l * l, c, B, N, rtol=o.n_rtol)
-                    nn = np.sqrt(np.einsum("ij,ij->i", N, N))[:, None]
-                    N = np.divide(N, nn, out=Nv.copy(), where=nn > 0)
+                    N, z = _k.normalize_z(N, Nv, rho2, beta2)
                     # (19) V-update: inner solver on (26), warm-started
-                    self.vsub.set(X0, fid, rho2 - beta2 * N)
+                    self.vsub.set(X0, fid, z)
                     Vn = run_inner(o.inner_solver, self.vsub, V, o.inner_iters, state)
                     if stage.relax > 0:
                         Vn = self.relaxer.step(Vn, sharp, stage.relax)
-                    # (20)-(21) multipliers
-                    r_t = t - _k.grad_edges(N, l, fa, fb)
-                    rho1 -= beta1 * r_t
-                    r_n = N - _k.face_normals(Vn, F)
-                    rho2 = rho2 - beta2 * r_n
-                    rel = float(np.linalg.norm(Vn - V) / max(np.linalg.norm(V), 1e-300))
+                    # (20)-(21) multipliers (D with the lengths of V^(k), as in the N-update)
+                    res_t = _k.update_rho1(t, N, l, fa, fb, rho1, beta1)
+                    Nv = _k.face_normals(Vn, F)
+                    res_n = _k.update_rho2(N, Nv, rho2, beta2)
+                    rel = np.sqrt(_k.sqdist(Vn, V) / max(_k.sqdist(V, np.zeros_like(V)), 1e-300))
                     V = Vn
+                    l = _k.edge_lengths(V, E_int)
                     k += 1
+                    reg = _k.reg_energy(Nv, l, fa, fb, sh, stage.a, o.willmore_weight)
                     entry = {
                         "iter": k,
                         "stage": stage.name,
-                        "energy": self.energy(V, X0, sharp, stage.a),
-                        "rel_change": rel,
-                        "res_t": float(np.sqrt(np.mean(np.einsum("ij,ij->i", r_t, r_t)))),
-                        "res_N": float(np.sqrt(np.mean(np.einsum("ij,ij->i", r_n, r_n)))),
+                        "energy": reg + 0.5 * _k.sqdist(V, X0, fid),
+                        "rel_change": float(rel),
+                        "res_t": float(np.sqrt(res_t / max(len(fa), 1))),
+                        "res_N": float(np.sqrt(res_n / nF)),
                         "n_sharp": int(sharp.sum()),
                         "time": time.perf_counter() - t_start,
                     }
