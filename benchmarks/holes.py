@@ -1,0 +1,224 @@
+#!/usr/bin/env python
+"""Hole filling benchmark (issue 4): cut-and-refill on real meshes, the real holes of the bunny,
+and fill + denoise in one solve.
+
+Cut-and-refill: a geodesic disc (Dijkstra on the edge graph) of radius 4, 8 and 16 mean edge
+lengths is cut from a closed mesh (the faces touching it are removed), refilled, and the new faces
+are compared with the removed ones: symmetric mean and Hausdorff distance relative to the
+bounding-box diagonal (:func:`meshrepair.metrics.distances`) and the mean angle between each
+patch face normal and the normal of the nearest removed face. Cases:
+
+* ``smooth``: spot.ply refined once by Loop subdivision (11,714 vertices), disc on the flank;
+* ``CAD smooth part``: fandisk.ply, disc centred on its curved face;
+* ``CAD creases``: fandisk.ply, disc centred near a corner where three sharp creases meet;
+* ``bunny``: the 5 real holes of bunny.ply (no ground truth: only the seam angle, time, size).
+
+Every case runs four variants, to show what each step contributes:
+
+* ``flat``: the membrane of the enclosing step (harmonic, no fairing, no solve) = minimal-area-like
+  flat fill;
+* ``flat+ADMM``: the membrane refined by the ADMM solve (edge-Willmore on the patch);
+* ``thin-plate``: the bi-Laplacian fairing with the surrounding ring as boundary data, no solve;
+* ``default``: thin-plate + ADMM (what :func:`meshrepair.fill.fill_holes` does).
+
+``seam°`` is the mean dihedral angle over the loop edges (patch against surround), ``ring°`` the
+mean dihedral angle of the original edges within 3 rings of the patch (the surround's own
+roughness, for comparison). ``t`` is wall seconds of
+``fill_holes`` (one thread). Usage: ``python benchmarks/holes.py`` (about a minute).
+"""
+
+from __future__ import annotations
+
+import sys
+import time
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+import _common  # noqa: E402  (limits BLAS threads before numpy is imported)
+import numpy as np  # noqa: E402
+import scipy.sparse as sp  # noqa: E402
+from scipy.sparse.csgraph import dijkstra  # noqa: E402
+from scipy.spatial import cKDTree  # noqa: E402
+
+from meshrepair.fill import fill_holes  # noqa: E402
+from meshrepair.geometry import dihedral_angles, face_normals, mean_edge_length  # noqa: E402
+from meshrepair.metrics import distances  # noqa: E402
+from meshrepair.topology import edge_topology  # noqa: E402
+
+VARIANTS = {
+    "flat": {"initial": "harmonic", "refine": False},
+    "flat+ADMM": {"initial": "harmonic"},
+    "thin-plate": {"initial": "bilaplacian", "refine": False},
+    "default": {},
+}
+
+
+def cut_disc(V, F, center, radius_edges):
+    topo = edge_topology(F, len(V))
+    e = topo.edges
+    w = np.linalg.norm(V[e[:, 0]] - V[e[:, 1]], axis=1)
+    G = sp.coo_matrix((np.r_[w, w], (np.r_[e[:, 0], e[:, 1]], np.r_[e[:, 1], e[:, 0]])),
+                      shape=(len(V), len(V))).tocsr()
+    inside = dijkstra(G, indices=center) < radius_edges * mean_edge_length(V, F)
+    removed = inside[F].any(axis=1)
+    Fk = F[~removed]
+    used = np.zeros(len(V), bool)
+    used[Fk.ravel()] = True
+    idx = -np.ones(len(V), np.int64)
+    idx[used] = np.arange(used.sum())
+    return V[used], idx[Fk], F[removed]
+
+
+def compact(V, F):
+    u = np.unique(F.ravel())
+    m = -np.ones(len(V), np.int64)
+    m[u] = np.arange(len(u))
+    return V[u], m[F]
+
+
+def seam_angles(res) -> tuple[float, float]:
+    """Mean dihedral angle (degrees) over the loop edges, and over the original edges within 3
+    rings of the patches (the surround, for comparison)."""
+    topo = edge_topology(res.F, len(res.V))
+    ang = dihedral_angles(face_normals(res.V, res.F), topo)
+    new = np.zeros(len(res.F), bool)
+    new[res.new_faces] = True
+    a, b = topo.edge_faces[:, 0], topo.edge_faces[:, 1]
+    inner = b >= 0
+    b = np.maximum(b, 0)
+    seam = inner & (new[a] != new[b])
+    near = np.zeros(len(res.V), bool)
+    near[res.F[res.new_faces].ravel()] = True
+    for _ in range(3):
+        near[res.F[near[res.F].any(axis=1)].ravel()] = True
+    ring = near[res.F].all(axis=1) & ~new
+    sur = inner & ring[a] & ring[b]
+    nan = float("nan")
+    return (float(ang[seam].mean()) if seam.any() else nan,
+            float(ang[sur].mean()) if sur.any() else nan)
+
+
+def errors(res, V_gt, F_gt, diag):
+    P = compact(res.V, res.F[res.new_faces])
+    G = compact(V_gt, F_gt)
+    d = distances(*P, *G)
+    n, ng = face_normals(*P), face_normals(*G)
+    _, i = cKDTree(G[0][G[1]].mean(axis=1)).query(P[0][P[1]].mean(axis=1))
+    ang = np.degrees(np.arccos(np.clip(np.einsum("ij,ij->i", n, ng[i]), -1, 1)))
+    return d["mean"] / diag, d["hausdorff"] / diag, float(ang.mean())
+
+
+def row(case, variant, res, err, dt):
+    m, h, nd = err if err is not None else (float("nan"),) * 3
+    status = f"{res.n_filled}/{len(res.holes)}"
+    seam, ring = seam_angles(res)
+    return (f"| {case:<30} | {variant:<10} | {m * 1e3:8.3f} | {h * 1e3:8.2f} | {nd:7.2f} | "
+            f"{seam:6.2f} | {ring:6.2f} | {dt:5.2f} | {len(res.new_vertices):5d} | "
+            f"{len(res.new_faces):5d} | {status:>6} |")
+
+
+HEADER = (f"| {'case':<30} | variant    | mean e-3 | Haus e-3 | normal° |  seam° |  ring° |   t s |"
+          " new V | new F | filled |\n|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
+
+
+def run_cut_cases(lines):
+    import trimesh
+
+    V, F, _ = _common.read("spot")
+    V, F = trimesh.remesh.subdivide_loop(V, F, iterations=1)
+    V, F = np.asarray(V, float), np.asarray(F, np.int64)
+    Vf, Ff, _ = _common.read("fandisk")
+    cases = [("smooth", V, F, (0.47, 0.0, 0.2)),
+             ("CAD smooth part", Vf, Ff, (1.21, 14.06, -1.61)),
+             ("CAD creases", Vf, Ff, (3.19, 14.41, -2.39))]
+    for name, V, F, p in cases:
+        diag = float(np.linalg.norm(V.max(axis=0) - V.min(axis=0)))
+        c = int(np.argmin(np.linalg.norm(V - np.asarray(p), axis=1)))
+        for r in (4, 8, 16):
+            Vc, Fc, F_gt = cut_disc(V, F, c, r)
+            for var, kw in VARIANTS.items():
+                t = time.perf_counter()
+                res = fill_holes(Vc, Fc, **kw)
+                dt = time.perf_counter() - t
+                err = errors(res, V, F_gt, diag) if len(res.new_faces) else None
+                lines.append(row(f"{name} r={r} ({len(F_gt)} F)", var, res, err, dt))
+                print(lines[-1], flush=True)
+
+
+def run_bunny(lines):
+    V, F, _ = _common.read("bunny")
+    for var, kw in VARIANTS.items():
+        t = time.perf_counter()
+        res = fill_holes(V, F, **kw)
+        dt = time.perf_counter() - t
+        lines.append(row("bunny 5 real holes", var, res, None, dt))
+        print(lines[-1], flush=True)
+
+
+def run_denoise(lines):
+    import trimesh  # noqa: F401
+
+    from meshrepair.noise import add_noise
+
+    V, F, _ = _common.read("spot")
+    diag = float(np.linalg.norm(V.max(axis=0) - V.min(axis=0)))
+    Vn = add_noise(V, F, 0.2, seed=1)
+    topo = edge_topology(F, len(V))
+    e = topo.edges
+    w = np.linalg.norm(V[e[:, 0]] - V[e[:, 1]], axis=1)
+    G = sp.coo_matrix((np.r_[w, w], (np.r_[e[:, 0], e[:, 1]], np.r_[e[:, 1], e[:, 0]])),
+                      shape=(len(V), len(V))).tocsr()
+    c = int(np.argmin(np.linalg.norm(V - np.array([0.47, 0.0, 0.2]), axis=1)))
+    inside = dijkstra(G, indices=c) < 4 * mean_edge_length(V, F)
+    removed = inside[F].any(axis=1)
+    used = np.zeros(len(V), bool)
+    used[F[~removed].ravel()] = True
+    idx = -np.ones(len(V), np.int64)
+    idx[used] = np.arange(used.sum())
+    Vc, Fc = Vn[used], idx[F[~removed]]
+    out = ["", "Fill + denoise (spot.ply, normal noise γ = 0.2, disc r = 4 cut from the noisy "
+           "mesh): surround = mean distance of the kept vertices to their clean positions / "
+           "diagonal; dihedral = mean over the patch border edges vs the surround within 3 rings",
+           "", "| variant | surround e-3 | patch mean e-3 | patch Haus e-3 | border° | "
+           "surround° | t s |", "|---|---:|---:|---:|---:|---:|---:|"]
+    for var, kw in (("fill only", {}), ("fill + denoise", {"denoise": True})):
+        t = time.perf_counter()
+        res = fill_holes(Vc, Fc, **kw)
+        dt = time.perf_counter() - t
+        m, h, _ = errors(res, V, F[removed], diag)
+        sur = np.linalg.norm(res.V[: len(Vc)] - V[used], axis=1).mean() / diag
+        tp = edge_topology(res.F, len(res.V))
+        ang = dihedral_angles(face_normals(res.V, res.F), tp)
+        new = np.zeros(len(res.F), bool)
+        new[res.new_faces] = True
+        a, b = tp.edge_faces[:, 0], np.maximum(tp.edge_faces[:, 1], 0)
+        near = np.zeros(len(res.V), bool)
+        near[res.F[res.new_faces].ravel()] = True
+        for _ in range(3):
+            near[res.F[near[res.F].any(axis=1)].ravel()] = True
+        ring = near[res.F].all(axis=1) & ~new
+        out.append(f"| {var} | {sur * 1e3:.3f} | {m * 1e3:.3f} | {h * 1e3:.2f} | "
+                   f"{ang[new[a] != new[b]].mean():.2f} | {ang[ring[a] & ring[b]].mean():.2f} | "
+                   f"{dt:.2f} |")
+    print("\n".join(out), flush=True)
+    lines.extend(out)
+
+
+def main() -> None:
+    _common.limit_threads(1)
+    info = _common.machine_info()
+    print(f"machine: {info.get('cpu', '?')}, {info.get('cores')} cores; python {info['python']}, "
+          f"numpy {info['numpy']}, scipy {info.get('scipy')}; git {info.get('git')}")
+    lines = [HEADER]
+    print(HEADER, flush=True)
+    _common.warm_imports(jit=True)
+    run_cut_cases(lines)
+    run_bunny(lines)
+    run_denoise(lines)
+    print("\n--- table ---")
+    print("\n".join(lines))
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,173 @@
+"""``meshrepair fill`` and ``meshrepair inpaint``: smooth hole filling and inpainting.
+
+Examples
+--------
+``meshrepair fill bunny.ply bunny_closed.ply``
+``meshrepair fill scan.ply scan_filled.ply --keep-border --max-hole-size 50 --denoise``
+``meshrepair fill scan.ply --list``
+``meshrepair inpaint head.ply head_fixed.ply --sphere 0.1,0.2,0.3,0.05``
+
+The output is written with :func:`meshrepair.io.write_mesh`; a PLY output gets a per-vertex
+``filled`` property (1 on new vertices, 0 elsewhere).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import logging
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import MeshRepairError
+
+log = logging.getLogger(__name__)
+
+
+def _floats(text: str, n: int, what: str) -> list[float]:
+    try:
+        vals = [float(t) for t in text.replace(" ", "").split(",")]
+    except ValueError:
+        vals = []
+    if len(vals) != n or not all(np.isfinite(vals)):
+        raise MeshRepairError(f"{what} needs {n} comma-separated numbers, got {text!r}")
+    return vals
+
+
+def _check_paths(inp: str, out: str, force: bool) -> Path:
+    from ..io import SUPPORTED_FORMATS
+
+    i, o = Path(inp), Path(out)
+    if o.suffix.lower() not in SUPPORTED_FORMATS:
+        raise MeshRepairError(f"output {out!r} must end with one of {', '.join(SUPPORTED_FORMATS)}")
+    if o.exists() and i.exists() and (o.resolve() == i.resolve() or o.samefile(i)):
+        raise MeshRepairError(f"output {out!r} is the input file; refusing to overwrite it, choose "
+                              "another output name")
+    if o.exists() and not force:
+        raise MeshRepairError(f"output {out!r} exists; pass --force to overwrite it")
+    return o
+
+
+def _write(out: Path, res, log_path: str | None, extra: dict) -> None:
+    from ..io import write_mesh
+
+    write_mesh(out, res.V, res.F, vertex_attributes={"filled": res.filled_mask}, overwrite=True)
+    if log_path:
+        data = {
+            "history": res.history,
+            "parameters": {k: (v if isinstance(v, (int, float, str, bool, type(None), list))
+                               else str(v)) for k, v in {**res.params, **extra}.items()},
+            "timings": res.timings,
+            "metrics": {"holes found": len(res.holes), "holes filled": res.n_filled,
+                        "holes skipped": res.n_skipped,
+                        "new vertices": int(len(res.new_vertices)),
+                        "new faces": int(len(res.new_faces))},
+            "holes": [h.as_dict() for h in res.holes],
+        }
+        Path(log_path).write_text(json.dumps(data, indent=1, default=float), encoding="utf-8")
+
+
+def run_fill(args: argparse.Namespace) -> int:
+    """Handler of ``meshrepair fill``; returns the exit code."""
+    from ..fill import fill_holes
+    from ..holes import find_holes
+    from ..io import read_mesh
+
+    if args.output is None and not args.list:
+        raise MeshRepairError("missing output file: give IN OUT (or --list to only list holes)")
+    out = None if args.list else _check_paths(args.input, args.output, args.force)
+    m = read_mesh(args.input)
+    if args.list:
+        holes = find_holes(m.V, m.F)
+        print(f"{args.input}: {len(holes)} holes (longest first)")
+        for h in holes:
+            print(f"  hole {h.index}: {h.n_boundary} boundary edges, length {h.length:.6g}"
+                  f"{', pinched' if h.pinched else ''}")
+        return 0
+    res = fill_holes(m.V, m.F, max_hole_size=args.max_hole_size, keep_border=args.keep_border,
+                     exclude=args.exclude or (), holes=args.holes, denoise=args.denoise,
+                     initial=args.initial, refine=not args.no_refine)
+    print(res.summary())
+    _write(out, res, args.log, {"input": args.input})
+    print(f"wrote {out} ({len(res.V)} vertices, {len(res.F)} faces, {res.timings['total']:.2f} s)")
+    return 0
+
+
+def run_inpaint(args: argparse.Namespace) -> int:
+    """Handler of ``meshrepair inpaint``; returns the exit code."""
+    from ..fill import inpaint
+    from ..io import read_mesh, read_vertex_mask
+
+    out = _check_paths(args.input, args.output, args.force)
+    m = read_mesh(args.input)
+    if args.region is not None:
+        region = read_vertex_mask(args.region, len(m.V), attribute=args.attribute)
+    elif args.sphere is not None:
+        x, y, z, r = _floats(args.sphere, 4, "--sphere")
+        region = ("sphere", (x, y, z), r)
+    else:
+        x0, y0, z0, x1, y1, z1 = _floats(args.box, 6, "--box")
+        region = ("box", (x0, y0, z0), (x1, y1, z1))
+    res = inpaint(m.V, m.F, region, denoise=args.denoise, initial=args.initial,
+                  refine=not args.no_refine)
+    print(res.summary())
+    _write(out, res, args.log, {"input": args.input})
+    print(f"wrote {out} ({len(res.V)} vertices, {len(res.F)} faces, {res.timings['total']:.2f} s)")
+    return 0
+
+
+def _common(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--denoise", action="store_true",
+                   help="also denoise the rest of the mesh in the same solve (default: only the "
+                   "new vertices move)")
+    p.add_argument("--initial", choices=("bilaplacian", "harmonic"), default="bilaplacian",
+                   help="initial patch: curved thin-plate fairing (default) or flat membrane")
+    p.add_argument("--no-refine", action="store_true",
+                   help="skip the ADMM solve (keep the initial patch; ignored with --denoise)")
+    p.add_argument("--force", action="store_true", help="overwrite OUT if it exists")
+    p.add_argument("--log", default=None, metavar="RUN.json",
+                   help="write the iteration history, parameters and per-hole reports as JSON "
+                   "(readable by 'meshrepair report --log')")
+
+
+def register(subparsers) -> None:
+    """Add the ``fill`` and ``inpaint`` sub-commands to an argparse ``subparsers`` object."""
+    p = subparsers.add_parser(
+        "fill",
+        help="fill holes smoothly (optionally denoising in the same solve)",
+        description="Fill the boundary loops of a mesh with smooth patches (energy (6) with "
+        "M_V = 0 on the patches). Holes are numbered longest first; list them with --list.",
+    )
+    p.add_argument("input", help="mesh file with holes")
+    p.add_argument("output", nargs="?", default=None,
+                   help="mesh file to write (PLY gets a 'filled' vertex property)")
+    p.add_argument("--list", action="store_true", help="only list the holes and exit")
+    p.add_argument("--max-hole-size", type=int, default=None, metavar="N",
+                   help="fill only holes with at most N boundary edges")
+    p.add_argument("--keep-border", action="store_true",
+                   help="leave the longest loop open (the border of a scan or an open model)")
+    p.add_argument("--exclude", type=int, nargs="+", default=None, metavar="I",
+                   help="hole indices to leave open")
+    p.add_argument("--holes", type=int, nargs="+", default=None, metavar="I",
+                   help="fill only these hole indices")
+    _common(p)
+    p.set_defaults(func=run_fill)
+
+    q = subparsers.add_parser(
+        "inpaint",
+        help="replace a damaged region by a smooth patch",
+        description="Remove the faces touching a region and fill the hole smoothly. Kept "
+        "vertices keep their order; the region's vertices are dropped; new vertices follow.",
+    )
+    q.add_argument("input", help="mesh file")
+    q.add_argument("output", help="mesh file to write (PLY gets a 'filled' vertex property)")
+    g = q.add_mutually_exclusive_group(required=True)
+    g.add_argument("--region", metavar="FILE",
+                   help="vertex mask: PLY vertex property, .npy, or a text file of indices")
+    g.add_argument("--sphere", metavar="X,Y,Z,R", help="vertices within distance R of (X,Y,Z)")
+    g.add_argument("--box", metavar="X0,Y0,Z0,X1,Y1,Z1", help="vertices inside the box")
+    q.add_argument("--attribute", default=None,
+                   help="PLY vertex property holding the mask (with --region FILE.ply)")
+    _common(q)
+    q.set_defaults(func=run_inpaint)
