@@ -77,3 +77,14 @@ def test_parser_options_documented():
     p = build_parser()
     text = p.format_help()
     assert "demo" in text
+
+
+def test_repair_commands_write_html_report(tmp_path):
+    out, rep = tmp_path / "filled.ply", tmp_path / "run.html"
+    assert main(["fill", str(SHARED / "bunny.ply"), str(out), "--report", str(rep)]) == 0
+    html = rep.read_text()
+    assert "holes filled" in html and html.count("data:image/png;base64,") >= 2
+    noisy, den, rep2 = tmp_path / "n.ply", tmp_path / "d.ply", tmp_path / "d.html"
+    assert main(["noise", str(SHARED / "spot.ply"), str(noisy), "--gamma", "0.2"]) == 0
+    assert main(["denoise", str(noisy), str(den), "-q", "--report", str(rep2)]) == 0
+    assert "noise estimate" in rep2.read_text()

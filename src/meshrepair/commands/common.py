@@ -52,3 +52,26 @@ class ProgressBar:
 
     def close(self) -> None:
         self.bar.close()
+
+
+def add_report_option(p) -> None:
+    """The ``--report OUT.html`` option shared by the repair commands."""
+    p.add_argument("--report", metavar="OUT.html", default=None,
+                   help="also write a self-contained HTML report (renders, masks, metrics, "
+                        "convergence plot, parameters, timings)")
+
+
+def write_run_report(path: str | None, *, title: str, input_mesh, output_mesh, masks: dict,
+                     history: list, parameters: dict, metrics: dict, timings: dict) -> None:
+    """Write the HTML report of a run if ``path`` is given (see :mod:`meshrepair.report`)."""
+    if not path:
+        return
+    from ..report import write_report
+
+    if Path(path).suffix.lower() not in (".html", ".htm"):
+        raise MeshRepairError(f"--report {path!r} must end with .html")
+    params = {k: (v if isinstance(v, (int, float, str, bool, type(None))) else str(v))
+              for k, v in parameters.items()}
+    write_report(path, title=title, input_mesh=input_mesh, output_mesh=output_mesh, masks=masks,
+                 history=history, parameters=params, metrics=metrics, timings=timings)
+    print(f"wrote {path}")

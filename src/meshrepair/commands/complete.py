@@ -147,6 +147,15 @@ def run_complete(args: argparse.Namespace) -> int:
           f"(hole {c['n_hole']}, template {c['n_template']}), boundary RMS {c['rms_before']:.3g} "
           f"-> {c['rms_after']:.3g}, {res.iterations} iterations "
           f"({time.perf_counter() - t0:.2f} s)")
+    from .common import write_run_report
+
+    write_run_report(
+        args.report, title=f"meshrepair complete {Path(args.input).name}",
+        input_mesh=(mesh.V, mesh.F), output_mesh=(res.V, res.F),
+        masks={"M_V": res.M_V, "M_E": res.M_E}, history=res.history, parameters=res.params,
+        metrics={"seam vertices": c["n_seam"], "rms boundary before": c["rms_before"],
+                 "rms boundary after": c["rms_after"], "iterations": res.iterations},
+        timings={"total": time.perf_counter() - t0})
     return 0
 
 
@@ -196,4 +205,7 @@ def register(subparsers) -> None:
                    help="write history, parameters, timings and correspondence as JSON "
                    "(readable by 'meshrepair report --log')")
     p.add_argument("--force", action="store_true", help="overwrite OUTPUT if it exists")
+    from .common import add_report_option
+
+    add_report_option(p)
     p.set_defaults(func=run_complete)

@@ -68,6 +68,19 @@ def _write(out: Path, res, log_path: str | None, extra: dict) -> None:
         Path(log_path).write_text(json.dumps(data, indent=1, default=float), encoding="utf-8")
 
 
+def _report(args: argparse.Namespace, res, m) -> None:
+    from .common import write_run_report
+
+    write_run_report(
+        args.report, title=f"meshrepair {args.command} {Path(args.input).name}",
+        input_mesh=(m.V, m.F), output_mesh=(res.V, res.F),
+        masks={"filled_V": res.filled_mask, "M_E": res.M_E}, history=res.history,
+        parameters=res.params, timings=res.timings,
+        metrics={"holes found": len(res.holes), "holes filled": res.n_filled,
+                 "holes skipped": res.n_skipped, "new vertices": int(len(res.new_vertices)),
+                 "new faces": int(len(res.new_faces))})
+
+
 def run_fill(args: argparse.Namespace) -> int:
     """Handler of ``meshrepair fill``; returns the exit code."""
     from ..fill import fill_holes
@@ -91,6 +104,7 @@ def run_fill(args: argparse.Namespace) -> int:
     print(res.summary())
     _write(out, res, args.log, {"input": args.input})
     print(f"wrote {out} ({len(res.V)} vertices, {len(res.F)} faces, {res.timings['total']:.2f} s)")
+    _report(args, res, m)
     return 0
 
 
@@ -114,6 +128,7 @@ def run_inpaint(args: argparse.Namespace) -> int:
     print(res.summary())
     _write(out, res, args.log, {"input": args.input})
     print(f"wrote {out} ({len(res.V)} vertices, {len(res.F)} faces, {res.timings['total']:.2f} s)")
+    _report(args, res, m)
     return 0
 
 
@@ -126,6 +141,9 @@ def _common(p: argparse.ArgumentParser) -> None:
     p.add_argument("--no-refine", action="store_true",
                    help="skip the ADMM solve (keep the initial patch; ignored with --denoise)")
     p.add_argument("--force", action="store_true", help="overwrite OUT if it exists")
+    from .common import add_report_option
+
+    add_report_option(p)
     p.add_argument("--log", default=None, metavar="RUN.json",
                    help="write the iteration history, parameters and per-hole reports as JSON "
                    "(readable by 'meshrepair report --log')")
