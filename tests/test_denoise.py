@@ -195,3 +195,14 @@ def test_non_manifold_refused():
     F = np.array([[0, 1, 2], [1, 0, 3], [0, 1, 4]])
     with pytest.raises(meshrepair.MeshRepairError, match="manifold"):
         denoise(V, F)
+
+
+def test_direct_and_iterative_backends_agree(spot):
+    V, F = spot
+    Vn = add_noise(V, F, 0.2, seed=5)
+    a = denoise(Vn, F, n_solver="cg", robust_iters=10, feature_iters=10)
+    b = denoise(Vn, F, n_solver="direct", robust_iters=10, feature_iters=10)
+    h = mean_edge_length(V, F)
+    # the iterative solve stops at a 1e-3 residual: same result up to that accuracy
+    assert np.abs(a.V - b.V).mean() < 1e-2 * h
+    assert abs(msae(a.V, V, F) - msae(b.V, V, F)) < 0.05 * msae(b.V, V, F)
