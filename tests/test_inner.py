@@ -71,3 +71,20 @@ def test_inner_solvers_reduce_and_agree(name, rng):
     # every solver reaches the same minimum energy (and minimiser) from the same start
     assert e == pytest.approx(e_ref, abs=1e-6 * abs(e_ref))
     assert np.abs(out - ref).max() < 5e-3
+
+
+def test_sliver_does_not_stall_descent(rng):
+    # one nearly degenerate face used to force a tiny global Armijo step on everyone
+    prob, V, F, *_ = _problem(rng)
+    V = V.copy()
+    f = F[0]
+    V[f[2]] = 0.5 * (V[f[0]] + V[f[1]]) + 1e-6 * (V[f[2]] - V[f[0]])  # sliver
+    e0 = prob.energy(V)
+    plain = run_inner("armijo", prob, V, 10, InnerState(step=1.0))
+    pre = run_inner("armijo", prob, V, 10, InnerState(step=1.0, precondition=True))
+    far = np.ones(len(V), bool)
+    far[np.unique(F[np.any(np.isin(F, f), axis=1)])] = False
+    move_plain = np.linalg.norm(plain - V, axis=1)[far].mean()
+    move_pre = np.linalg.norm(pre - V, axis=1)[far].mean()
+    assert prob.energy(pre) < e0
+    assert move_pre > 10 * move_plain  # the rest of the mesh still moves

@@ -309,6 +309,55 @@ if HAVE_NUMBA:
         return t
 
 
+def _np_vhess_diag(V, F, z, wfid):
+    p0, p1, p2 = V[F[:, 0]], V[F[:, 1]], V[F[:, 2]]
+    c = np.cross(p1 - p0, p2 - p0)
+    q2 = np.maximum(np.einsum("ij,ij->i", c, c), 1e-300)
+    zn = np.sqrt(np.einsum("ij,ij->i", z, z))
+    h = np.zeros(len(V))
+    for k, (a, b) in enumerate(((p2, p1), (p0, p2), (p1, p0))):
+        e2 = np.einsum("ij,ij->i", a - b, a - b)
+        h += np.bincount(F[:, k], zn * e2 / q2, len(V))
+    return h + wfid
+
+
+if HAVE_NUMBA:
+
+    @njit(cache=True)
+    def _nb_vhess_diag(V, F, z, wfid):  # pragma: no cover - compiled
+        h = wfid.copy()
+        for m in range(F.shape[0]):
+            i, j, k = F[m, 0], F[m, 1], F[m, 2]
+            ax = V[j, 0] - V[i, 0]
+            ay = V[j, 1] - V[i, 1]
+            az = V[j, 2] - V[i, 2]
+            bx = V[k, 0] - V[i, 0]
+            by = V[k, 1] - V[i, 1]
+            bz = V[k, 2] - V[i, 2]
+            cx = ay * bz - az * by
+            cy = az * bx - ax * bz
+            cz = ax * by - ay * bx
+            q2 = max(cx * cx + cy * cy + cz * cz, 1e-300)
+            zn = np.sqrt(z[m, 0] ** 2 + z[m, 1] ** 2 + z[m, 2] ** 2) / q2
+            dx, dy, dz = V[k, 0] - V[j, 0], V[k, 1] - V[j, 1], V[k, 2] - V[j, 2]
+            h[i] += zn * (dx * dx + dy * dy + dz * dz)
+            h[j] += zn * (bx * bx + by * by + bz * bz)
+            h[k] += zn * (ax * ax + ay * ay + az * az)
+        return h
+
+
+def vhess_diag(V, F, z, wfid):
+    """A diagonal curvature scale of (26) per vertex: ``λ_i + Σ_m |z_m| |e_opp|² / (2 s_m)²``.
+
+    The normal of face m turns by about ``|e_opp| / (2 s_m)`` per unit move of a corner, so sliver
+    faces make their corners stiff; dividing the gradient by this scale lets the rest of the mesh
+    keep a normal step (Jacobi-preconditioned descent).
+    """
+    if HAVE_NUMBA:
+        return _nb_vhess_diag(V, F, z, wfid)
+    return _np_vhess_diag(V, F, z, wfid)
+
+
 def venergy(V, F, z, V0, wfid):
     """Energy (26) up to a constant (see :class:`meshrepair.inner.VSubproblem`)."""
     if HAVE_NUMBA:

@@ -18,6 +18,7 @@ import scipy.sparse as sp
 
 from . import _kernels as _k
 
+STIFF_RATIO = 30.0  # vertices stiffer than this many times the median get a smaller step
 INNER_SOLVERS = ("armijo", "gd", "heavy_ball", "lbfgs", "bfgs")
 
 
@@ -69,11 +70,20 @@ class VSubproblem:
         return e, grad
 
 
+    def diag_scale(self, V: np.ndarray) -> np.ndarray:
+        """Per-vertex diagonal scale of the Hessian of (26) at ``V`` (see ``vhess_diag``)."""
+        h = _k.vhess_diag(V, self.F, self.z, self.wfid)
+        # only vertices stiffer than the typical one are slowed down: on a regular mesh this is
+        # plain gradient descent, and slivers no longer dictate the step of everyone else
+        return np.maximum(h, max(STIFF_RATIO * float(np.median(h)), 1e-300))
+
+
 @dataclass
 class InnerState:
     """What an inner solver remembers between ADMM iterations (the last accepted step)."""
 
     step: float = 1e-2
+    precondition: bool = False
 
 
 def _armijo_line(prob: VSubproblem, V, E, g, d, slope, step, c1=1e-4, shrink=0.5):
@@ -88,14 +98,21 @@ def _armijo_line(prob: VSubproblem, V, E, g, d, slope, step, c1=1e-4, shrink=0.5
 
 
 def solve_armijo(prob: VSubproblem, V: np.ndarray, iters: int, state: InnerState) -> np.ndarray:
-    """Gradient descent with Armijo backtracking (31), starting from twice the last step."""
+    """Gradient descent with Armijo backtracking (31), starting from twice the last step.
+
+    With ``state.precondition`` the direction is ``-D⁻¹ ∇J`` with the diagonal scale of
+    :meth:`VSubproblem.diag_scale` (computed once per call), and (31) uses the slope
+    ``<∇J, d>``; the step is then dimensionless (≈ 1 for a well-scaled problem).
+    """
     E, g = prob.energy_grad(V)
     step = state.step * 2.0
+    hinv = 1.0 / prob.diag_scale(V)[:, None] if state.precondition else None
     for it in range(iters):
-        gg = float(np.einsum("ij,ij->", g, g))
+        d = -g if hinv is None else -g * hinv
+        gg = -float(np.einsum("ij,ij->", g, d))
         if gg == 0.0:
             break
-        V, E, step = _armijo_line(prob, V, E, g, -g, -gg, step)
+        V, E, step = _armijo_line(prob, V, E, g, d, -gg, step)
         if step == 0.0:
             step = state.step
             break

@@ -90,6 +90,8 @@ class SolverOptions:
     mask_update_every : recompute an adaptive M_E every this many iterations (0 = only at stage
         start); the paper's dynamic update uses 3.
     mask_source : ``"N"`` (the ADMM normal variable, less noisy) or ``"V"`` (normals of the mesh).
+    precondition : Jacobi-precondition the Armijo V-descent (a per-vertex step): a few sliver or
+        folded faces otherwise force a tiny global step and stall the whole mesh.
     min_feature_edges : an adaptive mask keeps only sharp edges in connected chains of at least
         this many sharp edges (1 keeps all). Real creases are long lines; what residual noise
         marks sharp is scattered in short pieces.
@@ -108,6 +110,7 @@ class SolverOptions:
     mask_update_every: int = 0
     mask_source: str = "N"
     min_feature_edges: int = 1
+    precondition: bool = True
 
     def validate(self) -> None:
         from .errors import MeshRepairError
@@ -290,7 +293,7 @@ class ADMMSolver:
         l = _k.edge_lengths(V, E_int)
         rho1 = np.zeros((len(self.ie), 3))
         rho2 = np.zeros((topo.n_faces, 3))
-        state = InnerState(step=1e-2)
+        state = InnerState(step=1.0 if o.precondition else 1e-2, precondition=o.precondition)
         history: list[dict] = []
         t_start = time.perf_counter()
         k = 0
