@@ -358,6 +358,29 @@ def vhess_diag(V, F, z, wfid):
     return _np_vhess_diag(V, F, z, wfid)
 
 
+if HAVE_NUMBA:
+
+    @njit(cache=True)
+    def _nb_neighbor_sum(N, fa, fb):  # pragma: no cover - compiled
+        S = np.zeros_like(N)
+        for e in range(fa.shape[0]):
+            a, b = fa[e], fb[e]
+            for k in range(3):
+                S[a, k] += N[b, k]
+                S[b, k] += N[a, k]
+        return S
+
+
+def neighbor_sum(N, fa, fb):
+    """``S[f] = Σ N[g]`` over the faces g sharing an interior edge with f, shape ``(nF, 3)``."""
+    if HAVE_NUMBA:
+        return _nb_neighbor_sum(N, fa, fb)
+    S = np.zeros_like(N)
+    for k in range(3):
+        S[:, k] = np.bincount(fa, N[fb, k], len(N)) + np.bincount(fb, N[fa, k], len(N))
+    return S
+
+
 def venergy(V, F, z, V0, wfid):
     """Energy (26) up to a constant (see :class:`meshrepair.inner.VSubproblem`)."""
     if HAVE_NUMBA:

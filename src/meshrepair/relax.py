@@ -97,15 +97,13 @@ def locally_flipped_faces(V: np.ndarray, topo: Topology, cos_max: float = 0.0) -
     -------
     (nF,) bool
     """
-    from .geometry import face_normals
+    from . import _kernels as _k
 
-    N = face_normals(V, topo.faces)
+    N = _k.face_normals(np.ascontiguousarray(V, dtype=np.float64), topo.faces)
     ef = topo.edge_faces
     inner = ef[:, 1] >= 0
-    from .geometry import scatter_rows
-
-    a, b = ef[inner, 0], ef[inner, 1]
-    S = scatter_rows(np.r_[a, b], np.r_[N[b], N[a]], len(N))
+    a, b = np.ascontiguousarray(ef[inner, 0]), np.ascontiguousarray(ef[inner, 1])
+    S = _k.neighbor_sum(N, a, b)
     sn = np.linalg.norm(S, axis=1)
     return np.einsum("ij,ij->i", N, S) <= cos_max * sn
 
