@@ -516,36 +516,10 @@ def icp_loop_to_polyline(P: np.ndarray, target: np.ndarray, *, scale: bool = Fal
 
 def _closest_on_triangles(p: np.ndarray, a: np.ndarray, b: np.ndarray, c: np.ndarray
                           ) -> np.ndarray:
-    """Row-wise closest point to ``p`` on triangle ``abc`` (Ericson, Real-Time Collision
-    Detection, 5.1.5), all arrays ``(n, 3)``."""
-    ab, ac, ap = b - a, c - a, p - a
-    d1 = np.einsum("ij,ij->i", ab, ap)
-    d2 = np.einsum("ij,ij->i", ac, ap)
-    bp = p - b
-    d3 = np.einsum("ij,ij->i", ab, bp)
-    d4 = np.einsum("ij,ij->i", ac, bp)
-    cp = p - c
-    d5 = np.einsum("ij,ij->i", ab, cp)
-    d6 = np.einsum("ij,ij->i", ac, cp)
-    va = d3 * d6 - d5 * d4
-    vb = d5 * d2 - d1 * d6
-    vc = d1 * d4 - d3 * d2
-    with np.errstate(divide="ignore", invalid="ignore"):
-        den = va + vb + vc
-        v = np.where(den != 0, vb / den, 0.0)
-        w = np.where(den != 0, vc / den, 0.0)
-        q = a + v[:, None] * ab + w[:, None] * ac
-        t = np.where(d1 - d3 != 0, d1 / (d1 - d3), 0.0)
-        q = np.where(((vc <= 0) & (d1 >= 0) & (d3 <= 0))[:, None], a + t[:, None] * ab, q)
-        t = np.where(d2 - d6 != 0, d2 / (d2 - d6), 0.0)
-        q = np.where(((vb <= 0) & (d2 >= 0) & (d6 <= 0))[:, None], a + t[:, None] * ac, q)
-        e1, e2 = d4 - d3, d5 - d6
-        t = np.where(e1 + e2 != 0, e1 / (e1 + e2), 0.0)
-        q = np.where(((va <= 0) & (e1 >= 0) & (e2 >= 0))[:, None], b + t[:, None] * (c - b), q)
-    q = np.where(((d1 <= 0) & (d2 <= 0))[:, None], a, q)
-    q = np.where(((d3 >= 0) & (d4 <= d3))[:, None], b, q)
-    q = np.where(((d6 >= 0) & (d5 <= d6))[:, None], c, q)
-    return q
+    """Row-wise closest point to ``p`` on triangle ``abc`` (see metrics)."""
+    from .metrics import closest_points_on_triangles
+
+    return closest_points_on_triangles(p, a, b, c)
 
 
 def closest_points_on_mesh(P: np.ndarray, V: np.ndarray, F: np.ndarray, *, candidates: int = 8,

@@ -80,8 +80,12 @@ def point_to_surface(P: np.ndarray, V: np.ndarray, F: np.ndarray) -> np.ndarray:
     return best
 
 
-def _point_triangle_distance(p, a, b, c):
-    """Row-wise exact distance from p to triangle abc (Ericson's closest-point regions)."""
+def closest_points_on_triangles(p: np.ndarray, a: np.ndarray, b: np.ndarray, c: np.ndarray
+                                ) -> np.ndarray:
+    """Row-wise closest point to ``p`` on triangle ``abc``, all arrays ``(n, 3)``.
+
+    Ericson, Real-Time Collision Detection, 5.1.5 (Voronoi regions of vertices, edges, face).
+    """
     ab, ac, ap = b - a, c - a, p - a
     d1 = np.einsum("ij,ij->i", ab, ap)
     d2 = np.einsum("ij,ij->i", ac, ap)
@@ -99,10 +103,6 @@ def _point_triangle_distance(p, a, b, c):
         v = np.where(denom != 0, vb / denom, 0.0)
         w = np.where(denom != 0, vc / denom, 0.0)
         q = a + v[:, None] * ab + w[:, None] * ac
-        # vertex regions
-        q = np.where(((d1 <= 0) & (d2 <= 0))[:, None], a, q)
-        q = np.where(((d3 >= 0) & (d4 <= d3))[:, None], b, q)
-        q = np.where(((d6 >= 0) & (d5 <= d6))[:, None], c, q)
         # edge regions
         t_ab = np.where(d1 - d3 != 0, d1 / (d1 - d3), 0.0)
         m = (vc <= 0) & (d1 >= 0) & (d3 <= 0)
@@ -110,10 +110,20 @@ def _point_triangle_distance(p, a, b, c):
         t_ac = np.where(d2 - d6 != 0, d2 / (d2 - d6), 0.0)
         m = (vb <= 0) & (d2 >= 0) & (d6 <= 0)
         q = np.where(m[:, None], a + t_ac[:, None] * ac, q)
-        t_bc = np.where((d4 - d3) + (d5 - d6) != 0, (d4 - d3) / ((d4 - d3) + (d5 - d6)), 0.0)
-        m = (va <= 0) & ((d4 - d3) >= 0) & ((d5 - d6) >= 0)
+        e1, e2 = d4 - d3, d5 - d6
+        t_bc = np.where(e1 + e2 != 0, e1 / (e1 + e2), 0.0)
+        m = (va <= 0) & (e1 >= 0) & (e2 >= 0)
         q = np.where(m[:, None], b + t_bc[:, None] * (c - b), q)
-    return np.linalg.norm(p - q, axis=1)
+    # vertex regions take precedence
+    q = np.where(((d1 <= 0) & (d2 <= 0))[:, None], a, q)
+    q = np.where(((d3 >= 0) & (d4 <= d3))[:, None], b, q)
+    q = np.where(((d6 >= 0) & (d5 <= d6))[:, None], c, q)
+    return q
+
+
+def _point_triangle_distance(p, a, b, c):
+    """Row-wise exact distance from p to triangle abc."""
+    return np.linalg.norm(p - closest_points_on_triangles(p, a, b, c), axis=1)
 
 
 def distances(V: np.ndarray, F: np.ndarray, V_ref: np.ndarray, F_ref: np.ndarray, *,

@@ -1,0 +1,36 @@
+import numpy as np
+import pytest
+import trimesh
+
+from meshrepair.metrics import closest_points_on_triangles, distances, msae, vertex_error
+
+
+def test_closest_point_matches_dense_sampling(rng):
+    n = 200
+    a, b, c = (rng.normal(size=(n, 3)) for _ in range(3))
+    p = 2.0 * rng.normal(size=(n, 3))
+    q = closest_points_on_triangles(p, a, b, c)
+    d = np.linalg.norm(p - q, axis=1)
+    u, v = np.meshgrid(np.linspace(0, 1, 201), np.linspace(0, 1, 201))
+    keep = u + v <= 1
+    u, v = u[keep], v[keep]
+    for i in range(n):
+        pts = a[i] + u[:, None] * (b[i] - a[i]) + v[:, None] * (c[i] - a[i])
+        dense = np.linalg.norm(pts - p[i], axis=1).min()
+        assert d[i] <= dense + 1e-12
+        assert dense - d[i] < 2e-2 * max(np.linalg.norm(b[i] - a[i]), 1.0)
+
+
+def test_msae_and_ev_analytic():
+    V = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0.0]])
+    F = np.array([[0, 1, 2]])
+    R = np.array([[1, 0, 0], [0, np.cos(0.1), -np.sin(0.1)], [0, np.sin(0.1), np.cos(0.1)]])
+    assert msae(V @ R.T, V, F) == pytest.approx(np.degrees(0.1) ** 2)
+    assert vertex_error(V + [0, 0, 1], V) == pytest.approx(np.sqrt(3) / 3)
+
+
+def test_distances_sphere_offset():
+    m = trimesh.creation.icosphere(4)
+    V, F = np.asarray(m.vertices), np.asarray(m.faces)
+    d = distances(1.01 * V, F, V, F)
+    assert d["mean"] == pytest.approx(0.01, rel=0.1) and d["hausdorff"] < 0.012
