@@ -206,3 +206,21 @@ def test_direct_and_iterative_backends_agree(spot):
     # the iterative solve stops at a 1e-3 residual: same result up to that accuracy
     assert np.abs(a.V - b.V).mean() < 1e-2 * h
     assert abs(msae(a.V, V, F) - msae(b.V, V, F)) < 0.05 * msae(b.V, V, F)
+
+
+def test_locality_reordering_maps_back_exactly(spot, monkeypatch):
+    import sys
+
+    dmod = sys.modules["meshrepair.denoise"]
+
+    V, F = spot
+    Vn = add_noise(V, F, 0.2, seed=9)
+    a = denoise(Vn, F, robust_iters=15, feature_iters=15)
+    monkeypatch.setattr(dmod, "REORDER_MIN_VERTICES", 1)
+    b = denoise(Vn, F, robust_iters=15, feature_iters=15)
+    assert b.params["reordered"] and not a.params["reordered"]
+    assert np.array_equal(a.edges, b.edges) and np.array_equal(b.F, F)
+    h = mean_edge_length(V, F)
+    # same problem in another memory order: equal up to rounding amplified by the iteration
+    assert np.abs(a.V - b.V).mean() < 1e-3 * h
+    assert np.mean(a.M_E == b.M_E) > 0.995

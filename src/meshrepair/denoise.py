@@ -77,6 +77,52 @@ class DenoiseResult:
         return trimesh.Trimesh(self.V, self.F, process=False)
 
 
+REORDER_MIN_VERTICES = 200_000
+"""Meshes this large are solved in a Morton (Z-curve) order of vertices and faces: every kernel
+is memory-bound there, and the reordering measured 1.33 s instead of 1.76 s per iteration on a
+1.18M-vertex subdivided mesh. Smaller meshes keep their order (results then do not depend on a
+coordinate-dependent ordering, which keeps the rotation test exact to rounding)."""
+
+
+def locality_order(V: np.ndarray, F: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Vertex and face permutations along a Morton (Z-order) curve.
+
+    Returns
+    -------
+    pv : (nV,) int64, new vertex i is old vertex ``pv[i]``
+    pf : (nF,) int64, order of the faces (in the renumbered mesh)
+    """
+
+    def morton(P: np.ndarray, bits: int = 16) -> np.ndarray:
+        lo = P.min(axis=0)
+        span = max(float(np.ptp(P, axis=0).max()), 1e-300)
+        q = ((P - lo) / span * (2**bits - 1)).astype(np.int64)
+        code = np.zeros(len(P), np.int64)
+        for b in range(bits):
+            for d in range(3):
+                code |= ((q[:, d] >> b) & 1) << (3 * b + d)
+        return code
+
+    pv = np.argsort(morton(V), kind="stable")
+    inv = np.empty_like(pv)
+    inv[pv] = np.arange(len(pv))
+    pf = np.argsort(morton(V[pv][inv[F]].mean(axis=1)), kind="stable")
+    return pv, pf
+
+
+def _edge_values_to(topo, edges_old_ids: np.ndarray, values: np.ndarray) -> np.ndarray:
+    """Re-index per-edge ``values`` given on ``edges_old_ids`` (vertex ids of ``topo``) onto
+    ``topo.edges``."""
+    n = np.int64(topo.n_vertices)
+    e = np.sort(edges_old_ids, axis=1)
+    code_src = e[:, 0] * n + e[:, 1]
+    code_dst = topo.edges[:, 0] * n + topo.edges[:, 1]  # sorted (np.unique order)
+    pos = np.searchsorted(code_dst, code_src)
+    out = np.zeros(len(code_dst), dtype=values.dtype)
+    out[pos] = values
+    return out
+
+
 def lambda_from_noise(gamma: float) -> float:
     """Default fidelity weight λ for an estimated noise level γ̂ (mean edge lengths)."""
     return float(np.clip(0.02 / max(gamma, 1e-3) ** 2, 0.05, 1.0))
@@ -175,13 +221,23 @@ def denoise(
         if n_unf:
             Vs, left = untangle(V, topo)
             log.info("unfolded %d folded-over faces (%d left)", n_unf - left, left)
-    solver = ADMMSolver(F, len(V), options=opts, topo=topo)
-    res = solver.solve(Vs, callback=callback)
+    reorder = len(V) >= REORDER_MIN_VERTICES
+    if reorder:  # run on a cache-friendly copy, map the result back exactly
+        pv, pf = locality_order(Vs, F)
+        inv = np.empty_like(pv)
+        inv[pv] = np.arange(len(pv))
+        Fw = inv[F][pf]
+        res = ADMMSolver(Fw, len(V), options=opts).solve(Vs[pv], callback=callback)
+        V_out = res.V[inv]
+        M_E = _edge_values_to(topo, pv[res.edges], res.M_E)
+    else:
+        res = ADMMSolver(F, len(V), options=opts, topo=topo).solve(Vs, callback=callback)
+        V_out, M_E = res.V, res.M_E
     return DenoiseResult(
-        V=res.V,
+        V=V_out,
         F=F,
-        M_E=res.M_E,
-        edges=res.edges,
+        M_E=M_E,
+        edges=topo.edges.copy(),
         M_V=res.M_V,
         history=res.history,
         iterations=res.iterations,
@@ -191,6 +247,7 @@ def denoise(
                 "feature_iters": feature_iters, "mask_update_every": mask_update_every,
                 "min_feature_edges": min_feature_edges,
                 "tol": tol, "inner_solver": inner_solver, "inner_iters": inner_iters,
-                "n_solver": n_solver, "unfold": unfold, "n_components": report.n_components},
+                "n_solver": n_solver, "unfold": unfold, "n_components": report.n_components,
+                "reordered": reorder},
         n_unfolded=n_unf,
     )

@@ -36,6 +36,18 @@ class NormalSystem:
         self.perm = (M.data - 1).astype(np.int64) if M.nnz == len(rows) else None
         self.M = M
         self.rows, self.cols = rows, cols
+        # per-face neighbour table for the gather-form matrix-vector product
+        src = np.r_[fa, fb]
+        order = np.argsort(src, kind="stable")
+        s_sorted = src[order]
+        start = np.searchsorted(s_sorted, s_sorted, side="left")
+        slot = np.arange(len(order)) - start
+        self.nb = np.full((n_faces, 3), -1, dtype=np.int64)
+        self.fe = np.full((n_faces, 3), -1, dtype=np.int64)
+        if len(order) and slot.max() > 2:  # pragma: no cover - impossible for triangle meshes
+            raise ValueError("a face has more than three interior edges")
+        self.nb[s_sorted, slot] = np.r_[fb, fa][order]
+        self.fe[s_sorted, slot] = np.r_[np.arange(len(fa)), np.arange(len(fa))][order]
 
     def solve_cg(self, w: np.ndarray, c: float, B: np.ndarray, X0: np.ndarray, *,
                  rtol: float = 1e-5, maxiter: int = 200) -> tuple[np.ndarray, int]:
@@ -47,7 +59,7 @@ class NormalSystem:
         nF = self.nF
         diag = np.bincount(self.fa, w, nF) + np.bincount(self.fb, w, nF) + c
         X = np.array(X0, dtype=np.float64, copy=True, order="C")
-        it = _k._nb_pcg(self.fa, self.fb, np.ascontiguousarray(w), diag,
+        it = _k._nb_pcg(self.nb, self.fe, np.ascontiguousarray(w), diag,
                         np.ascontiguousarray(B), X, rtol, maxiter)
         return X, int(it)
 
