@@ -53,12 +53,27 @@ def estimate_noise(V: np.ndarray, F: np.ndarray, topo: Topology | None = None) -
     Laplacian ``δ_i = mean(v_j) - v_i``, scaled to a standard deviation (× 1.4826) and divided by
     ``sqrt(1 + 1/deg_i)`` (the Laplacian of i.i.d. noise mixes the vertex's own noise with the mean
     of its neighbours'). Curvature of a clean mesh adds a small bias (clean shared meshes read
-    0.00-0.05). Random-direction noise reads about 1/sqrt(3) of γ, since only the normal part is
-    seen.
+    0.00-0.05). Random-direction noise reads about 1/sqrt(3)-1/2 of γ, since only the normal part
+    is seen.
 
     Returns
     -------
     float, estimated γ.
+    """
+    return noise_statistics(V, F, topo)[0]
+
+
+def noise_statistics(V: np.ndarray, F: np.ndarray, topo: Topology | None = None
+                     ) -> tuple[float, float]:
+    """The robust (MAD) and the plain (RMS) noise level of :func:`estimate_noise`.
+
+    The two agree for Gaussian noise (measured within 5 % on the shared meshes at γ = 0.2);
+    impulsive noise, where a minority of vertices moves far, reads 1.5× higher in RMS
+    (twelve__impulsive0.5: 0.206 vs 0.306).
+
+    Returns
+    -------
+    (gamma_mad, gamma_rms) : floats in mean edge lengths.
     """
     V = np.asarray(V, dtype=np.float64)
     F = np.asarray(F, dtype=np.int64)
@@ -74,9 +89,12 @@ def estimate_noise(V: np.ndarray, F: np.ndarray, topo: Topology | None = None) -
     bnd[topo.edges[topo.boundary].ravel()] = True
     ok &= ~bnd
     if not ok.any():
-        return 0.0
+        return 0.0, 0.0
     lap = S[ok] / deg[ok, None] - V[ok]
     n = vertex_normals(V, F)[ok]
     h = np.einsum("ij,ij->i", lap, n) / np.sqrt(1.0 + 1.0 / deg[ok])
-    mad = 1.4826 * np.median(np.abs(h - np.median(h)))
-    return float(mad / edge_lengths(V, topo.edges).mean())
+    dev = h - np.median(h)
+    L = edge_lengths(V, topo.edges).mean()
+    mad = 1.4826 * np.median(np.abs(dev))
+    rms = np.sqrt(np.mean(dev**2))
+    return float(mad / L), float(rms / L)

@@ -30,7 +30,7 @@ def run_denoise(args: argparse.Namespace) -> int:
 
     out = output_path(args.output, [args.input], force=args.force)
     m = read_mesh(args.input)
-    total = args.robust_iters + args.feature_iters
+    total = (args.robust_iters if args.robust_iters is not None else 40) + args.feature_iters
     bar = ProgressBar(total, "denoise", enabled=not args.quiet)
     latest: dict = {}
 
@@ -174,7 +174,8 @@ def register(subparsers) -> None:
     p.add_argument("--lam", type=float, default=None,
                    help="fidelity weight lambda (default: from the estimated noise level)")
     p.add_argument("--th", type=float, default=30.0, help="sharp-edge dihedral threshold, degrees")
-    p.add_argument("--robust-iters", type=int, default=40, help="cap of the robust stage")
+    p.add_argument("--robust-iters", type=int, default=None,
+                   help="cap of the robust stage (default: 10-40 from the estimated noise)")
     p.add_argument("--feature-iters", type=int, default=60, help="cap of the feature stage")
     p.add_argument("--tol", type=float, default=1e-6, help="stopping rule (35) tolerance")
     p.add_argument("--inner-solver", default="armijo",
