@@ -88,3 +88,27 @@ def test_repair_commands_write_html_report(tmp_path):
     assert main(["noise", str(SHARED / "spot.ply"), str(noisy), "--gamma", "0.2"]) == 0
     assert main(["denoise", str(noisy), str(den), "-q", "--report", str(rep2)]) == 0
     assert "noise estimate" in rep2.read_text()
+
+
+@pytest.mark.parametrize("save", [False, True])
+def test_ctrl_c_stops_cleanly(tmp_path, monkeypatch, save):
+    from meshrepair.commands import common
+
+    calls = {"n": 0}
+    orig = common.ProgressBar.__call__
+
+    def interrupt_at_3(self, entry):
+        calls["n"] += 1
+        if calls["n"] == 3:
+            raise KeyboardInterrupt
+        orig(self, entry)
+
+    monkeypatch.setattr(common.ProgressBar, "__call__", interrupt_at_3)
+    out = tmp_path / "o.ply"
+    args = ["denoise", str(SHARED / "spot.ply"), str(out), "-q"]
+    rc = main(args + (["--save-on-interrupt"] if save else []))
+    if save:
+        assert rc == 0 and out.exists()
+        assert read_mesh(out).V.shape == read_mesh(SHARED / "spot.ply").V.shape
+    else:
+        assert rc == 130 and not out.exists()
