@@ -27,27 +27,31 @@ class NormalSystem:
 
     def __init__(self, fa: np.ndarray, fb: np.ndarray, n_faces: int):
         self.fa, self.fb, self.nF = fa, fb, n_faces
-        ar = np.arange(n_faces)
-        rows = np.r_[fa, fb, ar]
-        cols = np.r_[fb, fa, ar]
-        M = sp.csr_matrix((np.arange(1, len(rows) + 1, dtype=np.float64), (rows, cols)),
-                          shape=(n_faces, n_faces))
-        M.sum_duplicates()
-        self.perm = (M.data - 1).astype(np.int64) if M.nnz == len(rows) else None
-        self.M = M
-        self.rows, self.cols = rows, cols
+        self.M = None  # the sparse matrix, built on first use (direct solves only)
         # per-face neighbour table for the gather-form matrix-vector product
         src = np.r_[fa, fb]
         order = np.argsort(src, kind="stable")
         s_sorted = src[order]
-        start = np.searchsorted(s_sorted, s_sorted, side="left")
-        slot = np.arange(len(order)) - start
+        counts = np.bincount(s_sorted, minlength=n_faces)
+        if len(order) and counts.max() > 3:  # pragma: no cover - impossible for triangles
+            raise ValueError("a face has more than three interior edges")
+        starts = np.cumsum(counts) - counts
+        slot = np.arange(len(order)) - np.repeat(starts, counts)
         self.nb = np.full((n_faces, 3), -1, dtype=np.int64)
         self.fe = np.full((n_faces, 3), -1, dtype=np.int64)
-        if len(order) and slot.max() > 2:  # pragma: no cover - impossible for triangle meshes
-            raise ValueError("a face has more than three interior edges")
         self.nb[s_sorted, slot] = np.r_[fb, fa][order]
         self.fe[s_sorted, slot] = np.r_[np.arange(len(fa)), np.arange(len(fa))][order]
+
+    def _build(self) -> None:
+        fa, fb, nF = self.fa, self.fb, self.nF
+        ar = np.arange(nF)
+        self.rows = np.r_[fa, fb, ar]
+        self.cols = np.r_[fb, fa, ar]
+        M = sp.csr_matrix((np.arange(1, len(self.rows) + 1, dtype=np.float64),
+                           (self.rows, self.cols)), shape=(nF, nF))
+        M.sum_duplicates()
+        self.perm = (M.data - 1).astype(np.int64) if M.nnz == len(self.rows) else None
+        self.M = M
 
     def solve_cg(self, w: np.ndarray, c: float, B: np.ndarray, X0: np.ndarray, *,
                  rtol: float = 1e-5, maxiter: int = 200) -> tuple[np.ndarray, int]:
@@ -65,6 +69,8 @@ class NormalSystem:
 
     def matrix(self, w: np.ndarray, c: float) -> sp.csr_matrix:
         """``DᵀD + c I`` for interior-edge weights ``w = l²``; returns the (reused) matrix."""
+        if self.M is None:
+            self._build()
         nF = self.nF
         diag = np.bincount(self.fa, w, nF) + np.bincount(self.fb, w, nF) + c
         vals = np.r_[-w, -w, diag]
