@@ -25,3 +25,14 @@ def shared_mesh(name: str):
 @pytest.fixture
 def rng():
     return np.random.default_rng(12345)
+
+
+def grid(n: int, z=None) -> tuple[np.ndarray, np.ndarray]:
+    """(n x n)-vertex grid in the plane (or the graph of ``z(x, y)``), upward normals."""
+    x, y = np.meshgrid(np.arange(n, dtype=float), np.arange(n, dtype=float), indexing="ij")
+    x, y = x.ravel(), y.ravel()
+    V = np.c_[x, y, np.zeros(n * n) if z is None else z(x, y)]
+    i, j = np.meshgrid(np.arange(n - 1), np.arange(n - 1), indexing="ij")
+    a = (i * n + j).ravel()
+    b, c, d = a + n, a + n + 1, a + 1
+    return V, np.r_[np.c_[a, b, c], np.c_[a, c, d]].astype(np.int64)

@@ -25,6 +25,8 @@ from meshrepair.metrics import distances
 from meshrepair.topology import boundary_loops, edge_topology
 from meshrepair.validate import check_mesh
 
+from .conftest import grid
+
 MESHES = Path("/work/shared/meshes")
 needs_meshes = pytest.mark.skipif(not (MESHES / "spot.ply").exists(),
                                   reason="shared meshes not available")
@@ -81,17 +83,6 @@ def patch_errors(res: FillResult, V_gt, F_gt) -> dict:
     _, i = cKDTree(G[0][G[1]].mean(axis=1)).query(P[0][P[1]].mean(axis=1))
     ang = np.degrees(np.arccos(np.clip(np.einsum("ij,ij->i", n, ng[i]), -1, 1)))
     return {"mean": d["mean"], "hausdorff": d["hausdorff"], "normal_deg": float(ang.mean())}
-
-
-def grid(n: int, z=None) -> tuple[np.ndarray, np.ndarray]:
-    """(n x n)-vertex grid in the plane (or the graph of ``z(x, y)``), upward normals."""
-    x, y = np.meshgrid(np.arange(n, dtype=float), np.arange(n, dtype=float), indexing="ij")
-    x, y = x.ravel(), y.ravel()
-    V = np.c_[x, y, np.zeros(n * n) if z is None else z(x, y)]
-    i, j = np.meshgrid(np.arange(n - 1), np.arange(n - 1), indexing="ij")
-    a = (i * n + j).ravel()
-    b, c, d = a + n, a + n + 1, a + 1
-    return V, np.r_[np.c_[a, b, c], np.c_[a, c, d]].astype(np.int64)
 
 
 def drop_faces(V: np.ndarray, F: np.ndarray, keep: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

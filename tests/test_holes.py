@@ -19,6 +19,8 @@ from meshrepair.holes import (
 from meshrepair.topology import boundary_loops, edge_topology
 from meshrepair.validate import check_mesh
 
+from .conftest import grid
+
 MESHES = Path("/work/shared/meshes")
 needs_meshes = pytest.mark.skipif(not (MESHES / "bunny.ply").exists(),
                                   reason="shared meshes not available")
@@ -75,17 +77,6 @@ def wrap_loop() -> np.ndarray:
                  np.c_[np.full(10, np.cos(a[-1])), np.full(10, np.sin(a[-1])), z[:-1]],
                  np.c_[np.cos(a[::-1]), np.sin(a[::-1]), np.ones(61)][:-1],
                  np.c_[np.ones(10), np.zeros(10), z[::-1][:-1]]]
-
-
-def grid(n: int, z=None) -> tuple[np.ndarray, np.ndarray]:
-    """(n x n)-vertex grid in the plane (or the graph of ``z(x, y)``), upward normals."""
-    x, y = np.meshgrid(np.arange(n, dtype=float), np.arange(n, dtype=float), indexing="ij")
-    x, y = x.ravel(), y.ravel()
-    V = np.c_[x, y, np.zeros(n * n) if z is None else z(x, y)]
-    i, j = np.meshgrid(np.arange(n - 1), np.arange(n - 1), indexing="ij")
-    a = (i * n + j).ravel()
-    b, c, d = a + n, a + n + 1, a + 1
-    return V, np.r_[np.c_[a, b, c], np.c_[a, c, d]].astype(np.int64)
 
 
 def drop_faces(V: np.ndarray, F: np.ndarray, keep: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -81,20 +81,23 @@ def _np_grad_edges_T(t, l, fa, fb, nF):
 
 if HAVE_NUMBA:
 
+    @njit(cache=True, inline="always")
+    def _tri(V, i, j, k):  # pragma: no cover - compiled
+        """Edge vectors a = v_j - v_i, b = v_k - v_i and their cross product c = a x b."""
+        ax = V[j, 0] - V[i, 0]
+        ay = V[j, 1] - V[i, 1]
+        az = V[j, 2] - V[i, 2]
+        bx = V[k, 0] - V[i, 0]
+        by = V[k, 1] - V[i, 1]
+        bz = V[k, 2] - V[i, 2]
+        return ax, ay, az, bx, by, bz, ay * bz - az * by, az * bx - ax * bz, ax * by - ay * bx
+
     @njit(cache=True, fastmath=False)
     def _nb_venergy(V, F, z, V0, wfid):  # pragma: no cover - compiled
         e = 0.0
         for m in range(F.shape[0]):
             i, j, k = F[m, 0], F[m, 1], F[m, 2]
-            ax = V[j, 0] - V[i, 0]
-            ay = V[j, 1] - V[i, 1]
-            az = V[j, 2] - V[i, 2]
-            bx = V[k, 0] - V[i, 0]
-            by = V[k, 1] - V[i, 1]
-            bz = V[k, 2] - V[i, 2]
-            cx = ay * bz - az * by
-            cy = az * bx - ax * bz
-            cz = ax * by - ay * bx
+            ax, ay, az, bx, by, bz, cx, cy, cz = _tri(V, i, j, k)
             q = np.sqrt(cx * cx + cy * cy + cz * cz)
             if q < 1e-300:
                 q = 1e-300
@@ -164,15 +167,7 @@ if HAVE_NUMBA:
         out = np.zeros((F.shape[0], 3))
         for m in range(F.shape[0]):
             i, j, k = F[m, 0], F[m, 1], F[m, 2]
-            ax = V[j, 0] - V[i, 0]
-            ay = V[j, 1] - V[i, 1]
-            az = V[j, 2] - V[i, 2]
-            bx = V[k, 0] - V[i, 0]
-            by = V[k, 1] - V[i, 1]
-            bz = V[k, 2] - V[i, 2]
-            cx = ay * bz - az * by
-            cy = az * bx - ax * bz
-            cz = ax * by - ay * bx
+            ax, ay, az, bx, by, bz, cx, cy, cz = _tri(V, i, j, k)
             q = np.sqrt(cx * cx + cy * cy + cz * cz)
             if q > 0:
                 out[m, 0] = cx / q
@@ -338,15 +333,7 @@ if HAVE_NUMBA:
         h = wfid.copy()
         for m in range(F.shape[0]):
             i, j, k = F[m, 0], F[m, 1], F[m, 2]
-            ax = V[j, 0] - V[i, 0]
-            ay = V[j, 1] - V[i, 1]
-            az = V[j, 2] - V[i, 2]
-            bx = V[k, 0] - V[i, 0]
-            by = V[k, 1] - V[i, 1]
-            bz = V[k, 2] - V[i, 2]
-            cx = ay * bz - az * by
-            cy = az * bx - ax * bz
-            cz = ax * by - ay * bx
+            ax, ay, az, bx, by, bz, cx, cy, cz = _tri(V, i, j, k)
             q2 = max(cx * cx + cy * cy + cz * cz, 1e-300)
             zn = np.sqrt(z[m, 0] ** 2 + z[m, 1] ** 2 + z[m, 2] ** 2) / q2
             dx, dy, dz = V[k, 0] - V[j, 0], V[k, 1] - V[j, 1], V[k, 2] - V[j, 2]
