@@ -21,6 +21,10 @@ def output_path(out: str | os.PathLike, inputs: list, *, force: bool = False,
         ``force``), or exists and ``force`` is False.
     """
     o = Path(out)
+    if suffixes is MESH_SUFFIXES:
+        from ..io import SUPPORTED_FORMATS
+
+        suffixes = tuple(SUPPORTED_FORMATS)
     if o.suffix.lower() not in suffixes:
         raise MeshRepairError(f"output {str(o)!r} must end with one of {', '.join(suffixes)}")
     for i in inputs:
@@ -29,11 +33,11 @@ def output_path(out: str | os.PathLike, inputs: list, *, force: bool = False,
         ip = Path(i)
         if ip.resolve() == o.resolve() or (o.exists() and ip.exists() and os.path.samefile(ip, o)):
             raise MeshRepairError(
-                f"output {str(o)!r} is the input file; refusing to overwrite your data, choose "
-                "another output name")
+                f"output {str(o)!r} is the input file {str(ip)!r}; refusing to overwrite the "
+                "input, choose another output name")
     if o.exists() and not force:
         raise MeshRepairError(f"output {str(o)!r} exists; pass --force to overwrite it")
-    if not o.parent.exists():
+    if not o.parent.is_dir():
         raise MeshRepairError(f"the folder of the output {str(o)!r} does not exist")
     return o
 

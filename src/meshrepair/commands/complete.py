@@ -65,24 +65,9 @@ def _selection(path: str, V: np.ndarray, F: np.ndarray) -> dict:
 
 
 def _check_output(out: str, inputs: list[str | None], force: bool) -> Path:
-    from ..io import SUPPORTED_FORMATS
+    from .common import output_path
 
-    o = Path(out)
-    if o.suffix.lower() not in SUPPORTED_FORMATS:
-        raise MeshRepairError(f"output {str(o)!r} must end with one of "
-                              f"{', '.join(SUPPORTED_FORMATS)}")
-    for i in inputs:
-        if i is None:
-            continue
-        ip = Path(i)
-        if ip.resolve() == o.resolve() or (o.exists() and ip.exists() and o.samefile(ip)):
-            raise MeshRepairError(f"refusing to overwrite the input {str(ip)!r}; choose another "
-                                  "output file")
-    if o.exists() and not force:
-        raise MeshRepairError(f"output {str(o)!r} exists; pass --force to overwrite it")
-    if not o.parent.is_dir():
-        raise MeshRepairError(f"directory {str(o.parent)!r} of the output does not exist")
-    return o
+    return output_path(out, inputs, force=force)
 
 
 def run_complete(args: argparse.Namespace) -> int:

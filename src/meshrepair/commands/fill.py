@@ -36,17 +36,9 @@ def _floats(text: str, n: int, what: str) -> list[float]:
 
 
 def _check_paths(inp: str, out: str, force: bool) -> Path:
-    from ..io import SUPPORTED_FORMATS
+    from .common import output_path
 
-    i, o = Path(inp), Path(out)
-    if o.suffix.lower() not in SUPPORTED_FORMATS:
-        raise MeshRepairError(f"output {out!r} must end with one of {', '.join(SUPPORTED_FORMATS)}")
-    if o.exists() and i.exists() and (o.resolve() == i.resolve() or o.samefile(i)):
-        raise MeshRepairError(f"output {out!r} is the input file; refusing to overwrite it, choose "
-                              "another output name")
-    if o.exists() and not force:
-        raise MeshRepairError(f"output {out!r} exists; pass --force to overwrite it")
-    return o
+    return output_path(out, [inp], force=force)
 
 
 def _write(out: Path, res, log_path: str | None, extra: dict) -> None:

@@ -63,25 +63,11 @@ def load_mesh(path: str | os.PathLike) -> LoadedMesh:
 
 
 def check_output_path(out: str | os.PathLike, inputs: list, suffixes: tuple[str, ...]) -> Path:
-    """Refuse to overwrite an input file and require one of ``suffixes``."""
-    o = Path(out)
-    if o.suffix.lower() not in suffixes:
-        raise MeshRepairError(
-            f"output {str(o)!r} must end with {' or '.join(suffixes)}; choose such a file name"
-        )
-    for i in inputs:
-        if i is None:
-            continue
-        ip = Path(i)
-        same = ip.resolve() == o.resolve()
-        if not same and o.exists() and ip.exists():
-            same = os.path.samefile(ip, o)
-        if same:
-            raise MeshRepairError(
-                f"output {str(o)!r} is also an input file; refusing to overwrite it, choose "
-                "another output name"
-            )
-    return o
+    """Refuse to overwrite an input file and require one of ``suffixes`` (pictures and reports
+    are regenerated freely, so an existing non-input output is replaced)."""
+    from .common import output_path
+
+    return output_path(out, inputs, force=True, suffixes=suffixes)
 
 
 def sharp_edges(V: np.ndarray, F: np.ndarray, threshold: float = 30.0) -> np.ndarray:
