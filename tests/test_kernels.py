@@ -83,3 +83,64 @@ def test_numpy_fallback_runs_and_agrees(tmp_path):
     V = add_noise(np.asarray(m.vertices), m.faces, 0.2, seed=1)
     r = denoise(V, m.faces, robust_iters=5, feature_iters=5)
     assert np.abs(np.load(tmp_path / "np.npy") - r.V).max() < 1e-6
+
+
+def test_connectivity_kernels_agree_with_numpy(rng):
+    """Half-edge grouping equals the stable argsort, union-find the scipy labels, Morton codes
+    the numpy twin; including a high-valence vertex (the merge-sort bucket) and a pinched mesh."""
+    m = trimesh.creation.icosphere(3)
+    V = np.asarray(m.vertices)
+    F = np.asarray(m.faces, dtype=np.int64)
+    # a 100-triangle fan around one new vertex (valence > 64) plus a second sphere touching it
+    n = len(V)
+    ring = n + 1 + np.arange(100)
+    fan = np.c_[np.full(100, n), ring, np.roll(ring, -1)]
+    F2 = np.r_[F, fan, F + len(V) + 101]
+    F2 = F2[rng.permutation(len(F2))]
+    nV = 2 * len(V) + 101
+    assert np.array_equal(K._nb_group_halfedges(F2, nV), K._np_group_halfedges(F2, nV))
+    a = rng.integers(0, 500, 300)
+    b = rng.integers(0, 500, 300)
+    assert np.array_equal(K._nb_union_find(500, a, b), K._np_union_find(500, a, b))
+    P = rng.normal(size=(1000, 3))
+    assert np.array_equal(K._nb_morton(P, 16), K._np_morton(P, 16))
+    with pytest.raises(ValueError, match="out of range"):
+        K.group_halfedges(F, len(V) - 1)
+    with pytest.raises(ValueError, match="out of range"):
+        K.union_find(10, [0, 10], [1, 2])
+
+
+def test_face_shape_kernel_agrees(mesh):
+    V, F = mesh
+    a1, l1 = K._nb_face_area2_lmax2(V, F)
+    a2, l2 = K._np_face_area2_lmax2(V, F)
+    assert np.allclose(a1, a2, rtol=1e-12) and np.allclose(l1, l2, rtol=1e-12)
+
+
+def test_edge_table_kernel_agrees(mesh, rng):
+    V, F = mesh
+    F = F[rng.permutation(len(F))]
+    order = K._np_group_halfedges(F, len(V))
+    for x, y in zip(K._nb_edges_from_groups(F, order), K._np_edges_from_groups(F, order),
+                    strict=True):
+        assert np.array_equal(x, y)
+
+
+def test_vertex_normal_and_umbrella_kernels_agree(mesh):
+    V, F = mesh
+    V = np.r_[V, [[9.0, 9.0, 9.0]]]  # an unreferenced vertex gets a zero normal
+    assert np.allclose(K._nb_vertex_normals(V, F), K._np_vertex_normals(V, F), atol=1e-13)
+    assert not K._nb_vertex_normals(V, F)[-1].any()
+    E = edge_topology(F, len(V)).edges
+    for x, y in zip(K._nb_umbrella(V, E), K._np_umbrella(V, E), strict=True):
+        assert np.allclose(x, y, rtol=1e-13)
+
+
+def test_face_neighbour_table_kernel_agrees(mesh):
+    V, F = mesh
+    topo = edge_topology(F, len(V))
+    fa, fb = topo.edge_faces[topo.interior].T
+    fa, fb = np.ascontiguousarray(fa), np.ascontiguousarray(fb)
+    for x, y in zip(K._nb_face_neighbour_table(fa, fb, len(F)),
+                    K._np_face_neighbour_table(fa, fb, len(F)), strict=True):
+        assert np.array_equal(x, y)

@@ -578,3 +578,361 @@ def sqdist(A, B, wts=None):
     if HAVE_NUMBA:
         return float(_nb_sqdist(A, B, np.ones(len(A)) if wts is None else wts))
     return _np_sqdist(A, B, wts)
+
+
+# ---------------------------------------------------------------------------------------------
+# connectivity kernels (setup of large meshes: one O(n) pass instead of sorts and graph builds)
+
+
+def _np_group_halfedges(F, n_vertices):
+    he = np.stack([F, np.roll(F, -1, axis=1)], axis=2).reshape(-1, 2)
+    code = np.minimum(he[:, 0], he[:, 1]) * np.int64(n_vertices) + np.maximum(he[:, 0], he[:, 1])
+    return np.argsort(code, kind="stable")
+
+
+def _np_union_find(n, a, b):
+    import scipy.sparse as sp
+    from scipy.sparse.csgraph import connected_components
+
+    G = sp.coo_matrix((np.ones(len(a), dtype=np.int8), (a, b)), shape=(n, n))
+    return connected_components(G.tocsr(), directed=False)[1].astype(np.int64)
+
+
+def _np_face_area2_lmax2(V, F):
+    e01 = V[F[:, 1]] - V[F[:, 0]]
+    e12 = V[F[:, 2]] - V[F[:, 1]]
+    e20 = V[F[:, 0]] - V[F[:, 2]]
+    l2 = np.stack([np.einsum("ij,ij->i", e, e) for e in (e01, e12, e20)], axis=1)
+    cross = np.cross(e01, -e20)
+    return np.sqrt(np.einsum("ij,ij->i", cross, cross)), l2.max(axis=1)
+
+
+def _np_morton(P, bits):
+    lo = P.min(axis=0)
+    span = max(float(np.ptp(P, axis=0).max()), 1e-300)
+    q = ((P - lo) / span * (2**bits - 1)).astype(np.int64)
+    code = np.zeros(len(P), np.int64)
+    for b in range(bits):
+        for d in range(3):
+            code |= ((q[:, d] >> b) & 1) << (3 * b + d)
+    return code
+
+
+if HAVE_NUMBA:
+
+    @njit(cache=True)
+    def _nb_group_halfedges(F, n_vertices):  # pragma: no cover - compiled
+        # bucket the half-edges by their lower vertex (counting sort), then sort each bucket by
+        # the upper vertex, stably: the same permutation as a stable argsort of lo * nV + hi
+        nH = 3 * F.shape[0]
+        lo = np.empty(nH, np.int64)
+        hi = np.empty(nH, np.int64)
+        start = np.zeros(n_vertices + 1, np.int64)
+        for h in range(nH):
+            f, k = h // 3, h % 3
+            u, v = F[f, k], F[f, (k + 1) % 3]
+            if u < v:
+                lo[h], hi[h] = u, v
+            else:
+                lo[h], hi[h] = v, u
+            start[lo[h] + 1] += 1
+        for i in range(n_vertices):
+            start[i + 1] += start[i]
+        pos = start[:-1].copy()
+        order = np.empty(nH, np.int64)
+        for h in range(nH):
+            order[pos[lo[h]]] = h
+            pos[lo[h]] += 1
+        for v in range(n_vertices):
+            s, e = start[v], start[v + 1]
+            if e - s > 64:  # a high-valence vertex: stable merge sort of the bucket
+                keys = hi[order[s:e]]
+                p = np.argsort(keys, kind="mergesort")
+                order[s:e] = order[s:e][p]
+                continue
+            for i in range(s + 1, e):
+                h = order[i]
+                key = hi[h]
+                j = i - 1
+                while j >= s and hi[order[j]] > key:
+                    order[j + 1] = order[j]
+                    j -= 1
+                order[j + 1] = h
+        return order
+
+    @njit(cache=True)
+    def _nb_edges_from_groups(F, order):  # pragma: no cover - compiled
+        nH = order.shape[0]
+        n_e = 0
+        plo, phi = -1, -1
+        for i in range(nH):
+            h = order[i]
+            u, v = F[h // 3, h % 3], F[h // 3, (h % 3 + 1) % 3]
+            lo, hi = min(u, v), max(u, v)
+            if lo != plo or hi != phi:
+                n_e += 1
+                plo, phi = lo, hi
+        edges = np.empty((n_e, 2), np.int64)
+        edge_he = np.full((n_e, 2), -1, np.int64)
+        counts = np.zeros(n_e, np.int64)
+        inv = np.empty(nH, np.int64)
+        e = -1
+        plo, phi = -1, -1
+        for i in range(nH):
+            h = order[i]
+            u, v = F[h // 3, h % 3], F[h // 3, (h % 3 + 1) % 3]
+            lo, hi = min(u, v), max(u, v)
+            if lo != plo or hi != phi:
+                e += 1
+                plo, phi = lo, hi
+                edges[e, 0], edges[e, 1] = lo, hi
+                edge_he[e, 0] = h
+            elif counts[e] == 1:
+                edge_he[e, 1] = h
+            counts[e] += 1
+            inv[h] = e
+        return edges, edge_he, inv, counts
+
+    @njit(cache=True)
+    def _nb_union_find(n, a, b):  # pragma: no cover - compiled
+        parent = np.arange(n)
+        for i in range(a.shape[0]):
+            x, y = a[i], b[i]
+            while parent[x] != x:
+                parent[x] = parent[parent[x]]
+                x = parent[x]
+            while parent[y] != y:
+                parent[y] = parent[parent[y]]
+                y = parent[y]
+            if x != y:
+                if x < y:
+                    parent[y] = x
+                else:
+                    parent[x] = y
+        # roots are the smallest member: label components in order of their smallest member
+        label = np.empty(n, np.int64)
+        nc = 0
+        for i in range(n):
+            r = i
+            while parent[r] != r:
+                r = parent[r]
+            parent[i] = r
+            if r == i:
+                label[i] = nc
+                nc += 1
+            else:
+                label[i] = label[r]
+        return label
+
+    @njit(cache=True)
+    def _nb_face_area2_lmax2(V, F):  # pragma: no cover - compiled
+        nF = F.shape[0]
+        area2 = np.empty(nF)
+        lmax2 = np.empty(nF)
+        for m in range(nF):
+            i, j, k = F[m, 0], F[m, 1], F[m, 2]
+            ax, ay, az, bx, by, bz, cx, cy, cz = _tri(V, i, j, k)
+            dx, dy, dz = bx - ax, by - ay, bz - az
+            area2[m] = np.sqrt(cx * cx + cy * cy + cz * cz)
+            lmax2[m] = max(ax * ax + ay * ay + az * az, dx * dx + dy * dy + dz * dz,
+                           bx * bx + by * by + bz * bz)
+        return area2, lmax2
+
+    @njit(cache=True)
+    def _nb_vertex_normals(V, F):  # pragma: no cover - compiled
+        vn = np.zeros((V.shape[0], 3))
+        for m in range(F.shape[0]):
+            i, j, k = F[m, 0], F[m, 1], F[m, 2]
+            ax, ay, az, bx, by, bz, cx, cy, cz = _tri(V, i, j, k)
+            for v in (i, j, k):
+                vn[v, 0] += cx
+                vn[v, 1] += cy
+                vn[v, 2] += cz
+        for v in range(V.shape[0]):
+            q = np.sqrt(vn[v, 0] ** 2 + vn[v, 1] ** 2 + vn[v, 2] ** 2)
+            if q > 0:
+                vn[v, 0] /= q
+                vn[v, 1] /= q
+                vn[v, 2] /= q
+        return vn
+
+    @njit(cache=True)
+    def _nb_umbrella(V, E):  # pragma: no cover - compiled
+        S = np.zeros((V.shape[0], 3))
+        deg = np.zeros(V.shape[0])
+        for e in range(E.shape[0]):
+            a, b = E[e, 0], E[e, 1]
+            for k in range(3):
+                S[a, k] += V[b, k]
+                S[b, k] += V[a, k]
+            deg[a] += 1.0
+            deg[b] += 1.0
+        return S, deg
+
+    @njit(cache=True)
+    def _nb_face_neighbour_table(fa, fb, n_faces):  # pragma: no cover - compiled
+        nb = np.full((n_faces, 3), -1, np.int64)
+        fe = np.full((n_faces, 3), -1, np.int64)
+        fill = np.zeros(n_faces, np.int64)
+        for side in range(2):  # all (fa -> fb) entries first, then (fb -> fa), edges ascending
+            for e in range(fa.shape[0]):
+                f, g = (fa[e], fb[e]) if side == 0 else (fb[e], fa[e])
+                if fill[f] == 3:
+                    return nb, fe, False
+                nb[f, fill[f]] = g
+                fe[f, fill[f]] = e
+                fill[f] += 1
+        return nb, fe, True
+
+    @njit(cache=True)
+    def _nb_morton(P, bits):  # pragma: no cover - compiled
+        n = P.shape[0]
+        lo0, lo1, lo2 = P[0, 0], P[0, 1], P[0, 2]
+        hi0, hi1, hi2 = lo0, lo1, lo2
+        for i in range(n):
+            lo0, hi0 = min(lo0, P[i, 0]), max(hi0, P[i, 0])
+            lo1, hi1 = min(lo1, P[i, 1]), max(hi1, P[i, 1])
+            lo2, hi2 = min(lo2, P[i, 2]), max(hi2, P[i, 2])
+        span = max(max(hi0 - lo0, hi1 - lo1), max(hi2 - lo2, 1e-300))
+        K = 2**bits - 1
+        code = np.zeros(n, np.int64)
+        for i in range(n):
+            q0 = np.int64((P[i, 0] - lo0) / span * K)
+            q1 = np.int64((P[i, 1] - lo1) / span * K)
+            q2 = np.int64((P[i, 2] - lo2) / span * K)
+            c = np.int64(0)
+            for b in range(bits):
+                c |= ((q0 >> b) & 1) << (3 * b)
+                c |= ((q1 >> b) & 1) << (3 * b + 1)
+                c |= ((q2 >> b) & 1) << (3 * b + 2)
+            code[i] = c
+        return code
+
+
+def group_halfedges(F, n_vertices):
+    """Half-edges ``3 f + k`` (``F[f, k] -> F[f, (k + 1) % 3]``) sorted by their undirected edge
+    ``(min, max)``, ties in index order: equal to a stable argsort of ``min * nV + max``."""
+    F = np.ascontiguousarray(F, dtype=np.int64)
+    if F.size and (int(F.min()) < 0 or int(F.max()) >= n_vertices):
+        raise ValueError("face indices out of range [0, n_vertices)")
+    if HAVE_NUMBA:
+        return _nb_group_halfedges(F, int(n_vertices))
+    return _np_group_halfedges(F, n_vertices)
+
+
+def edges_from_groups(F, order):
+    """Unique edges ``(nE, 2)``, their first two half-edges ``3 f + k`` ``(nE, 2)`` (-1 if
+    absent), the edge of every half-edge ``(3 nF,)`` and the face count of every edge, from the
+    grouping of :func:`group_halfedges`."""
+    if HAVE_NUMBA:
+        return _nb_edges_from_groups(np.ascontiguousarray(F, dtype=np.int64), order)
+    return _np_edges_from_groups(F, order)
+
+
+def _np_edges_from_groups(F, order):
+    he = np.stack([F, np.roll(F, -1, axis=1)], axis=2).reshape(-1, 2)
+    key = np.sort(he, axis=1)
+    ks = key[order]
+    new = np.empty(len(order), dtype=bool)
+    new[:1] = True
+    new[1:] = (ks[1:, 0] != ks[:-1, 0]) | (ks[1:, 1] != ks[:-1, 1])
+    starts = np.flatnonzero(new)
+    counts = np.diff(np.append(starts, len(order)))
+    inv = np.empty(len(order), dtype=np.int64)
+    inv[order] = np.cumsum(new) - 1
+    first = order[starts]
+    edge_he = np.full((len(starts), 2), -1, dtype=np.int64)
+    edge_he[:, 0] = first
+    two = counts >= 2
+    edge_he[two, 1] = order[starts[two] + 1]
+    return key[first], edge_he, inv, counts
+
+
+def union_find(n, a, b):
+    """Component label of each of ``n`` nodes linked by pairs ``(a[i], b[i])``; labels number the
+    components in order of their smallest node (as scipy's ``connected_components``)."""
+    a = np.ascontiguousarray(a, dtype=np.int64)
+    b = np.ascontiguousarray(b, dtype=np.int64)
+    if a.size and (min(int(a.min()), int(b.min())) < 0 or max(int(a.max()), int(b.max())) >= n):
+        raise ValueError("node indices out of range [0, n)")
+    if HAVE_NUMBA:
+        return _nb_union_find(int(n), a, b)
+    return _np_union_find(int(n), a, b)
+
+
+def face_area2_lmax2(V, F):
+    """Doubled area and squared longest side of every face, two ``(nF,)`` arrays."""
+    if HAVE_NUMBA:
+        return _nb_face_area2_lmax2(np.ascontiguousarray(V, dtype=np.float64),
+                                    np.ascontiguousarray(F, dtype=np.int64))
+    return _np_face_area2_lmax2(V, F)
+
+
+def _np_vertex_normals(V, F):
+    c = np.cross(V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]])
+    c3 = np.repeat(c, 3, axis=0)
+    idx = F.ravel()
+    vn = np.stack([np.bincount(idx, c3[:, j], len(V)) for j in range(3)], axis=1)
+    n = np.linalg.norm(vn, axis=1, keepdims=True)
+    return np.divide(vn, n, out=np.zeros_like(vn), where=n > 0)
+
+
+def _np_umbrella(V, E):
+    idx = np.r_[E[:, 0], E[:, 1]]
+    nb = np.r_[V[E[:, 1]], V[E[:, 0]]]
+    S = np.stack([np.bincount(idx, nb[:, j], len(V)) for j in range(3)], axis=1)
+    return S, np.bincount(idx, minlength=len(V)).astype(np.float64)
+
+
+def vertex_normals(V, F):
+    """Area-weighted unit vertex normals ``(nV, 3)`` (zero rows for unreferenced vertices)."""
+    V = np.ascontiguousarray(V, dtype=np.float64)
+    F = np.ascontiguousarray(F, dtype=np.int64)
+    if HAVE_NUMBA:
+        return _nb_vertex_normals(V, F)
+    return _np_vertex_normals(V, F)
+
+
+def umbrella(V, E):
+    """Sum of the neighbours' positions ``(nV, 3)`` and the degree ``(nV,)`` over edges ``E``."""
+    V = np.ascontiguousarray(V, dtype=np.float64)
+    E = np.ascontiguousarray(E, dtype=np.int64)
+    if HAVE_NUMBA:
+        return _nb_umbrella(V, E)
+    return _np_umbrella(V, E)
+
+
+def _np_face_neighbour_table(fa, fb, n_faces):
+    src = np.r_[fa, fb]
+    order = np.argsort(src, kind="stable")
+    s_sorted = src[order]
+    counts = np.bincount(s_sorted, minlength=n_faces)
+    if len(order) and counts.max() > 3:
+        return None, None, False
+    starts = np.cumsum(counts) - counts
+    slot = np.arange(len(order)) - np.repeat(starts, counts)
+    nb = np.full((n_faces, 3), -1, dtype=np.int64)
+    fe = np.full((n_faces, 3), -1, dtype=np.int64)
+    nb[s_sorted, slot] = np.r_[fb, fa][order]
+    fe[s_sorted, slot] = np.r_[np.arange(len(fa)), np.arange(len(fa))][order]
+    return nb, fe, True
+
+
+def face_neighbour_table(fa, fb, n_faces):
+    """Per-face neighbours ``nb (nF, 3)`` across interior edges ``(fa[e], fb[e])`` and the edge
+    ``fe (nF, 3)`` of each, ``-1`` padded; in the order of a stable sort of ``np.r_[fa, fb]``."""
+    fa = np.ascontiguousarray(fa, dtype=np.int64)
+    fb = np.ascontiguousarray(fb, dtype=np.int64)
+    f = _nb_face_neighbour_table if HAVE_NUMBA else _np_face_neighbour_table
+    nb, fe, ok = f(fa, fb, int(n_faces))
+    if not ok:  # pragma: no cover - impossible for triangles
+        raise ValueError("a face has more than three interior edges")
+    return nb, fe
+
+
+def morton(P, bits=16):
+    """Morton (Z-order) code of each point of ``P (n, 3)`` on a ``2**bits`` grid."""
+    P = np.ascontiguousarray(P, dtype=np.float64)
+    if HAVE_NUMBA:
+        return _nb_morton(P, bits)
+    return _np_morton(P, bits)

@@ -30,11 +30,11 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ._memory import heap_allocations
 from .errors import MeshRepairError
 from .noise import noise_statistics
 from .relax import untangle
 from .solver import ADMMSolver, SolverOptions, Stage
-from .topology import edge_topology
 
 log = logging.getLogger(__name__)
 
@@ -93,16 +93,7 @@ def locality_order(V: np.ndarray, F: np.ndarray) -> tuple[np.ndarray, np.ndarray
     pv : (nV,) int64, new vertex i is old vertex ``pv[i]``
     pf : (nF,) int64, order of the faces (in the renumbered mesh)
     """
-
-    def morton(P: np.ndarray, bits: int = 16) -> np.ndarray:
-        lo = P.min(axis=0)
-        span = max(float(np.ptp(P, axis=0).max()), 1e-300)
-        q = ((P - lo) / span * (2**bits - 1)).astype(np.int64)
-        code = np.zeros(len(P), np.int64)
-        for b in range(bits):
-            for d in range(3):
-                code |= ((q[:, d] >> b) & 1) << (3 * b + d)
-        return code
+    from ._kernels import morton
 
     pv = np.argsort(morton(V), kind="stable")
     inv = np.empty_like(pv)
@@ -210,10 +201,22 @@ def denoise(
         For invalid meshes (see :func:`meshrepair.validate.check_mesh`) or options.
     """
     from .io import as_arrays
-    from .validate import check_mesh
 
     V, F = as_arrays(V, F)
-    report = check_mesh(V, F, name="input mesh")
+    with heap_allocations(len(V) >= REORDER_MIN_VERTICES):
+        return _denoise(V, F, lam=lam, th=th, a=a, robust_iters=robust_iters,
+                        feature_iters=feature_iters, mask_update_every=mask_update_every,
+                        min_feature_edges=min_feature_edges, tol=tol, unfold=unfold,
+                        inner_solver=inner_solver, inner_iters=inner_iters,
+                        n_solver=n_solver, stages=stages, callback=callback)
+
+
+def _denoise(V, F, *, lam, th, a, robust_iters, feature_iters, mask_update_every,
+             min_feature_edges, tol, unfold, inner_solver, inner_iters, n_solver, stages,
+             callback) -> DenoiseResult:
+    from .validate import _check_mesh
+
+    report, topo = _check_mesh(V, F, name="input mesh")
     if lam is not None and not (np.isfinite(lam) and lam >= 0):
         raise MeshRepairError(f"lam must be a finite number >= 0, got {lam}")
     for nm, val in (("robust_iters", robust_iters), ("feature_iters", feature_iters)):
@@ -221,7 +224,6 @@ def denoise(
             continue
         if not isinstance(val, (int, np.integer, float)) or int(val) != val or val < 0:
             raise MeshRepairError(f"{nm} must be a non-negative integer, got {val}")
-    topo = edge_topology(F, len(V))
     gamma, gamma_rms = noise_statistics(V, F, topo)
     lam_used = lambda_from_noise(gamma) if lam is None else float(lam)
     opts_kw = dict(lam=lam_used, th=th, tol=tol, inner_solver=inner_solver,

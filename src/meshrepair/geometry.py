@@ -89,10 +89,9 @@ def scatter_rows(index: np.ndarray, values: np.ndarray, n: int) -> np.ndarray:
 
 def vertex_normals(V: np.ndarray, F: np.ndarray) -> np.ndarray:
     """Area-weighted unit vertex normals, shape ``(nV, 3)``."""
-    c = np.cross(V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]])
-    vn = scatter_rows(F.ravel(), np.repeat(c, 3, axis=0), len(V))
-    n = np.linalg.norm(vn, axis=1, keepdims=True)
-    return np.divide(vn, n, out=np.zeros_like(vn), where=n > 0)
+    from ._kernels import vertex_normals as _vertex_normals
+
+    return _vertex_normals(V, F)
 
 
 def mean_curvature(V: np.ndarray, F: np.ndarray) -> np.ndarray:

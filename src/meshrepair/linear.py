@@ -15,6 +15,8 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
+from . import _kernels as _k
+
 N_SOLVERS = ("auto", "cg", "direct")
 
 
@@ -29,18 +31,7 @@ class NormalSystem:
         self.fa, self.fb, self.nF = fa, fb, n_faces
         self.M = None  # the sparse matrix, built on first use (direct solves only)
         # per-face neighbour table for the gather-form matrix-vector product
-        src = np.r_[fa, fb]
-        order = np.argsort(src, kind="stable")
-        s_sorted = src[order]
-        counts = np.bincount(s_sorted, minlength=n_faces)
-        if len(order) and counts.max() > 3:  # pragma: no cover - impossible for triangles
-            raise ValueError("a face has more than three interior edges")
-        starts = np.cumsum(counts) - counts
-        slot = np.arange(len(order)) - np.repeat(starts, counts)
-        self.nb = np.full((n_faces, 3), -1, dtype=np.int64)
-        self.fe = np.full((n_faces, 3), -1, dtype=np.int64)
-        self.nb[s_sorted, slot] = np.r_[fb, fa][order]
-        self.fe[s_sorted, slot] = np.r_[np.arange(len(fa)), np.arange(len(fa))][order]
+        self.nb, self.fe = _k.face_neighbour_table(fa, fb, n_faces)
 
     def _build(self) -> None:
         fa, fb, nF = self.fa, self.fb, self.nF
@@ -56,8 +47,6 @@ class NormalSystem:
     def solve_cg(self, w: np.ndarray, c: float, B: np.ndarray, X0: np.ndarray, *,
                  rtol: float = 1e-5, maxiter: int = 200) -> tuple[np.ndarray, int]:
         """Jacobi-PCG on ``(DᵀD + c I) X = B`` from ``X0``; fused kernel when numba is present."""
-        from . import _kernels as _k
-
         if not _k.HAVE_NUMBA:
             return block_pcg(self.matrix(w, c), B, X0, rtol=rtol, maxiter=maxiter)
         nF = self.nF

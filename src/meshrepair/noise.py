@@ -8,8 +8,10 @@ from __future__ import annotations
 
 import numpy as np
 
+from ._kernels import edge_lengths as _k_edge_lengths
+from ._kernels import umbrella
 from .errors import MeshRepairError
-from .geometry import edge_lengths, mean_edge_length, scatter_rows, vertex_normals
+from .geometry import mean_edge_length, vertex_normals
 from .topology import Topology, edge_topology
 
 
@@ -81,8 +83,7 @@ def noise_statistics(V: np.ndarray, F: np.ndarray, topo: Topology | None = None
         topo = edge_topology(F, len(V))
     e = topo.edges
     nV = len(V)
-    deg = np.bincount(e.ravel(), minlength=nV).astype(float)
-    S = scatter_rows(np.r_[e[:, 0], e[:, 1]], np.r_[V[e[:, 1]], V[e[:, 0]]], nV)
+    S, deg = umbrella(V, e)
     ok = deg > 0
     # skip boundary vertices: their umbrella is one-sided
     bnd = np.zeros(nV, bool)
@@ -94,7 +95,7 @@ def noise_statistics(V: np.ndarray, F: np.ndarray, topo: Topology | None = None
     n = vertex_normals(V, F)[ok]
     h = np.einsum("ij,ij->i", lap, n) / np.sqrt(1.0 + 1.0 / deg[ok])
     dev = h - np.median(h)
-    L = edge_lengths(V, topo.edges).mean()
+    L = _k_edge_lengths(V, topo.edges).mean()
     mad = 1.4826 * np.median(np.abs(dev))
     rms = np.sqrt(np.mean(dev**2))
     return float(mad / L), float(rms / L)

@@ -28,6 +28,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from . import _kernels as _k
+from ._memory import heap_allocations
 from .geometry import sharp_edge_mask
 from .inner import INNER_SOLVERS, InnerState, VSubproblem, run_inner
 from .linear import N_SOLVERS, NormalSystem, solve_normals
@@ -38,6 +39,7 @@ from .topology import Topology, edge_topology
 log = logging.getLogger(__name__)
 
 MASK_MODES = ("all", "adaptive", "none", "given")
+HEAP_MIN_VERTICES = 200_000  # see meshrepair._memory: larger arrays exceed glibc's mmap threshold
 
 
 @dataclass(frozen=True)
@@ -216,13 +218,20 @@ class ADMMSolver:
                            else np.asarray(edge_force, dtype=np.int8))
         self.fixed = None if fixed is None else np.asarray(fixed, dtype=bool)
         self.vsub = VSubproblem(self.F, nV, fixed=self.fixed)
-        self.relaxer = TangentialRelaxer(self.topo, self.fixed)
+        self._relaxer: TangentialRelaxer | None = None  # built on first use (stage.relax > 0)
         # only interior edges carry a normal jump: t, rho1 live on them
         self.ie = np.flatnonzero(self.topo.interior)
         self.E_int = np.ascontiguousarray(self.topo.edges[self.ie])
         self.fa = np.ascontiguousarray(self.topo.edge_faces[self.ie, 0])
         self.fb = np.ascontiguousarray(self.topo.edge_faces[self.ie, 1])
         self.nsys = NormalSystem(self.fa, self.fb, self.topo.n_faces)
+
+    @property
+    def relaxer(self) -> TangentialRelaxer:
+        """The tangential relaxation operator (built on first use)."""
+        if self._relaxer is None:
+            self._relaxer = TangentialRelaxer(self.topo, self.fixed)
+        return self._relaxer
 
     # -- masks ---------------------------------------------------------------------------------
     def _mask(self, mode: str, normals: np.ndarray, given: np.ndarray | None) -> np.ndarray:
@@ -270,6 +279,12 @@ class ADMMSolver:
         -------
         SolverResult
         """
+        with heap_allocations(self.topo.n_vertices >= HEAP_MIN_VERTICES):
+            return self._solve(V0, V_init, given_mask=given_mask, callback=callback)
+
+    def _solve(self, V0: np.ndarray, V_init: np.ndarray | None, *,
+               given_mask: np.ndarray | None,
+               callback: Callable[[dict], None] | None) -> SolverResult:
         o = self.options
         topo = self.topo
         V0 = np.asarray(V0, dtype=np.float64)

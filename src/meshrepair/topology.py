@@ -78,26 +78,25 @@ def edge_topology(F: np.ndarray, n_vertices: int | None = None) -> Topology:
     nF = F.shape[0]
     if n_vertices is None:
         n_vertices = int(F.max()) + 1 if nF else 0
-    he = np.stack([F, np.roll(F, -1, axis=1)], axis=2).reshape(-1, 2)  # (3nF, 2), face-major
-    key = np.sort(he, axis=1)
-    code = key[:, 0] * np.int64(n_vertices) + key[:, 1]
-    uniq, first, inv, counts = np.unique(code, return_index=True, return_inverse=True,
-                                         return_counts=True)
-    edges = key[first]
-    face_of_he = np.repeat(np.arange(nF, dtype=np.int64), 3)
-    order = np.argsort(inv, kind="stable")  # half-edges grouped by edge, faces ascending
-    starts = np.concatenate([[0], np.cumsum(counts)[:-1]])
-    edge_faces = np.full((uniq.shape[0], 2), -1, dtype=np.int64)
-    edge_faces[:, 0] = face_of_he[order[starts]]
-    two = counts >= 2
-    edge_faces[two, 1] = face_of_he[order[starts[two] + 1]]
+    from ._kernels import edges_from_groups, group_halfedges
+
+    # half-edges grouped by edge, faces ascending (a stable sort by the edge's vertex pair)
+    return _topology_from_parts(F, n_vertices,
+                                *edges_from_groups(F, group_halfedges(F, n_vertices)))
+
+
+def _topology_from_parts(F: np.ndarray, n_vertices: int, edges: np.ndarray, edge_he: np.ndarray,
+                         inv: np.ndarray, counts: np.ndarray) -> Topology:
+    """A :class:`Topology` from the output of ``_kernels.edges_from_groups``."""
+    nF = F.shape[0]
+    edge_faces = np.where(edge_he >= 0, edge_he // 3, -1)
     return Topology(
         n_vertices=int(n_vertices),
         faces=F,
         edges=edges,
         edge_faces=edge_faces,
-        face_edges=inv.reshape(nF, 3).astype(np.int64),
-        edge_counts=counts.astype(np.int64),
+        face_edges=inv.reshape(nF, 3),
+        edge_counts=counts,
     )
 
 
@@ -128,11 +127,10 @@ def connected_components(F: np.ndarray, n_vertices: int) -> tuple[int, np.ndarra
     labels : (nV,) int64
         Component label per vertex; unreferenced vertices get their own labels.
     """
-    from scipy.sparse.csgraph import connected_components as cc
+    from ._kernels import union_find
 
-    he = np.concatenate([F[:, [0, 1]], F[:, [1, 2]]])
-    A = sp.coo_matrix((np.ones(len(he)), (he[:, 0], he[:, 1])), shape=(n_vertices, n_vertices))
-    n, labels = cc(A, directed=False)
+    labels = union_find(n_vertices, np.r_[F[:, 0], F[:, 1]], np.r_[F[:, 1], F[:, 2]])
+    n = int(labels.max()) + 1 if len(labels) else 0
     return int(n), labels.astype(np.int64)
 
 

@@ -49,11 +49,16 @@ import logging
 from dataclasses import dataclass
 
 import numpy as np
-import scipy.sparse as sp
-from scipy.sparse.csgraph import connected_components as _cc
 
+from ._kernels import (
+    edge_lengths,
+    edges_from_groups,
+    face_area2_lmax2,
+    group_halfedges,
+    union_find,
+)
 from .errors import MeshRepairError
-from .topology import connected_components
+from .topology import Topology, _topology_from_parts, connected_components
 
 logger = logging.getLogger(__name__)
 
@@ -302,8 +307,8 @@ def _pinched_vertices(F: np.ndarray, n_vertices: int, he_first: np.ndarray,
     # consistent orientation: h1 = u -> w, h2 = w -> u
     a = np.concatenate([he_first, end_corner(he_first)])
     b = np.concatenate([end_corner(he_second), he_second])
-    G = sp.coo_matrix((np.ones(len(a), dtype=np.int8), (a, b)), shape=(n_corners, n_corners))
-    n_groups, labels = _cc(G.tocsr(), directed=False)
+    labels = union_find(n_corners, a, b)
+    n_groups = int(labels.max()) + 1 if len(labels) else 0
     group_vertex = np.empty(n_groups, dtype=np.int64)
     group_vertex[labels] = corner_vertex
     fans = np.bincount(group_vertex, minlength=n_vertices)
@@ -316,10 +321,7 @@ def _boundary_loop_count(bedges: np.ndarray) -> int:
         return 0
     verts, local = np.unique(bedges.ravel(), return_inverse=True)
     local = local.reshape(-1, 2)
-    n = len(verts)
-    G = sp.coo_matrix((np.ones(len(local), dtype=np.int8), (local[:, 0], local[:, 1])),
-                      shape=(n, n))
-    return int(_cc(G.tocsr(), directed=False)[0])
+    return int(union_find(len(verts), local[:, 0], local[:, 1]).max()) + 1
 
 
 def check_mesh(V: np.ndarray, F: np.ndarray, *, name: str = "mesh",
@@ -350,6 +352,12 @@ def check_mesh(V: np.ndarray, F: np.ndarray, *, name: str = "mesh",
         If the mesh cannot be processed; the message names the problem, the first offending
         elements and a fix.
     """
+    return _check_mesh(V, F, name=name, allow_degenerate=allow_degenerate)[0]
+
+
+def _check_mesh(V, F, *, name: str = "mesh", allow_degenerate: bool = False
+                ) -> tuple[MeshReport, Topology]:
+    """:func:`check_mesh`, also returning the edge topology it built (reused by callers)."""
     V = _as_vertex_array(V, name)
     F = _as_face_array(F, name)
     _check_shapes(V, F, name)
@@ -385,19 +393,8 @@ def check_mesh(V: np.ndarray, F: np.ndarray, *, name: str = "mesh",
         )
 
     # --- edges --------------------------------------------------------------------------------
-    he = np.stack([F, np.roll(F, -1, axis=1)], axis=2).reshape(-1, 2)  # half-edge 3f+k
-    lo = np.minimum(he[:, 0], he[:, 1])
-    hi = np.maximum(he[:, 0], he[:, 1])
-    code = lo * np.int64(nV) + hi
-    order = np.argsort(code, kind="stable")
-    cs = code[order]
-    new = np.empty(len(cs), dtype=bool)
-    new[0] = True
-    np.not_equal(cs[1:], cs[:-1], out=new[1:])
-    starts = np.flatnonzero(new)
-    counts = np.diff(np.append(starts, len(cs)))
-    edge_he = order[starts]  # one half-edge per unique edge
-    edges = np.stack([lo[edge_he], hi[edge_he]], axis=1)
+    # half-edge h = 3 f + k runs F[f, k] -> F[f, (k + 1) % 3]
+    edges, edge_he, he_edge, counts = edges_from_groups(F, group_halfedges(F, nV))
     nE = len(edges)
 
     nonman = counts > 2
@@ -414,9 +411,10 @@ def check_mesh(V: np.ndarray, F: np.ndarray, *, name: str = "mesh",
 
     # --- orientation --------------------------------------------------------------------------
     interior = counts == 2
-    h1 = order[starts[interior]]
-    h2 = order[starts[interior] + 1]
-    same_dir = he[h1, 0] == he[h2, 0]
+    h1 = edge_he[interior, 0]
+    h2 = edge_he[interior, 1]
+    Fr = F.ravel()
+    same_dir = Fr[h1] == Fr[h2]
     if same_dir.any():
         bad = np.flatnonzero(interior)[same_dir]
         listed = ", ".join(
@@ -432,15 +430,8 @@ def check_mesh(V: np.ndarray, F: np.ndarray, *, name: str = "mesh",
         )
 
     # --- zero-area faces ----------------------------------------------------------------------
-    e01 = V[F[:, 1]] - V[F[:, 0]]
-    e12 = V[F[:, 2]] - V[F[:, 1]]
-    e20 = V[F[:, 0]] - V[F[:, 2]]
-    l2 = np.stack([np.einsum("ij,ij->i", e, e) for e in (e01, e12, e20)], axis=1)
-    lmax2 = l2.max(axis=1)
-    cross = np.cross(e01, -e20)
-    area2 = np.sqrt(np.einsum("ij,ij->i", cross, cross))  # doubled area
-    d = V[edges[:, 1]] - V[edges[:, 0]]
-    mean_len = float(np.sqrt(np.einsum("ij,ij->i", d, d)).mean())
+    area2, lmax2 = face_area2_lmax2(V, F)  # doubled area, squared longest side
+    mean_len = float(edge_lengths(V, edges).mean())
     degenerate = (area2 <= DEGENERATE_SHAPE_TOL * lmax2) | (
         area2 <= DEGENERATE_SCALE_TOL * mean_len**2)
     n_degenerate = int(degenerate.sum())
@@ -503,4 +494,4 @@ def check_mesh(V: np.ndarray, F: np.ndarray, *, name: str = "mesh",
         n_degenerate_faces=n_degenerate,
         is_closed=bool(len(bedges) == 0),
         mean_edge_length=mean_len,
-    )
+    ), _topology_from_parts(F, nV, edges, edge_he, he_edge, counts)
