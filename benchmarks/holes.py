@@ -24,7 +24,14 @@ Every case runs four variants, to show what each step contributes:
 ``seam°`` is the mean dihedral angle over the loop edges (patch against surround), ``ring°`` the
 mean dihedral angle of the original edges within 3 rings of the patch (the surround's own
 roughness, for comparison). ``t`` is wall seconds of
-``fill_holes`` (one thread). Usage: ``python benchmarks/holes.py`` (about a minute).
+``fill_holes`` (one thread). ``method`` is the enclosing method of the patch (``plane``,
+``pca-plane``, ``disc``: planar projection; ``liepa``: Liepa's minimum-weight triangulation, the
+fallback when a planar patch intersects the surface).
+
+Usage: ``python benchmarks/holes.py [--enclose auto,liepa] [--cases cut,bunny,denoise]``
+(about a minute). ``--enclose`` sets the order in which :data:`meshrepair.fill.ENCLOSE_ORDER`
+tries the enclosing methods (default: the library's), e.g. ``liepa,auto`` to try Liepa's
+triangulation first.
 """
 
 from __future__ import annotations
@@ -113,13 +120,15 @@ def row(case, variant, res, err, dt):
     m, h, nd = err if err is not None else (float("nan"),) * 3
     status = f"{res.n_filled}/{len(res.holes)}"
     seam, ring = seam_angles(res)
+    meth = ",".join(sorted({r.reason.split(",")[0] for r in res.holes if r.status == "filled"}))
     return (f"| {case:<30} | {variant:<10} | {m * 1e3:8.3f} | {h * 1e3:8.2f} | {nd:7.2f} | "
             f"{seam:6.2f} | {ring:6.2f} | {dt:5.2f} | {len(res.new_vertices):5d} | "
-            f"{len(res.new_faces):5d} | {status:>6} |")
+            f"{len(res.new_faces):5d} | {status:>6} | {meth:<6} |")
 
 
 HEADER = (f"| {'case':<30} | variant    | mean e-3 | Haus e-3 | normal° |  seam° |  ring° |   t s |"
-          " new V | new F | filled |\n|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
+          " new V | new F | filled | method |\n"
+          "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|")
 
 
 def run_cut_cases(lines):
@@ -206,16 +215,44 @@ def run_denoise(lines):
 
 
 def main() -> None:
+    import argparse
+
+    import meshrepair.fill
+
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--enclose", default=None,
+                    help="comma-separated order of enclosing methods (auto, liepa); default: "
+                         f"{','.join(meshrepair.fill.ENCLOSE_ORDER)}")
+    ap.add_argument("--cases", default="cut,bunny,denoise",
+                    help="comma-separated subset of: cut, bunny, denoise")
+    args = ap.parse_args()
+    if args.enclose:
+        order = tuple(m.strip() for m in args.enclose.split(","))
+        if not order or set(order) - {"auto", "liepa"}:
+            ap.error("--enclose takes methods among: auto, liepa")
+        meshrepair.fill.ENCLOSE_ORDER = order
+    cases = {c.strip() for c in args.cases.split(",")}
+    if cases - {"cut", "bunny", "denoise"}:
+        ap.error("--cases takes: cut, bunny, denoise")
     _common.limit_threads(1)
     info = _common.machine_info()
     print(f"machine: {info.get('cpu', '?')}, {info.get('cores')} cores; python {info['python']}, "
           f"numpy {info['numpy']}, scipy {info.get('scipy')}; git {info.get('git')}")
     lines = [HEADER]
     print(HEADER, flush=True)
+    print(f"enclosing order: {','.join(meshrepair.fill.ENCLOSE_ORDER)}", flush=True)
     _common.warm_imports(jit=True)
-    run_cut_cases(lines)
-    run_bunny(lines)
-    run_denoise(lines)
+    # compile (or load) the numba kernel of Liepa's triangulation outside the timings
+    from meshrepair.holes import min_weight_triangulation
+
+    t = np.linspace(0, 2 * np.pi, 9)[:-1]
+    min_weight_triangulation(np.c_[np.cos(t), np.sin(t), np.cos(2 * t)])
+    if "cut" in cases:
+        run_cut_cases(lines)
+    if "bunny" in cases:
+        run_bunny(lines)
+    if "denoise" in cases:
+        run_denoise(lines)
     print("\n--- table ---")
     print("\n".join(lines))
 

@@ -7,12 +7,14 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from meshrepair import holes as H
 from meshrepair.errors import MeshRepairError
 from meshrepair.holes import (
     enclose_holes,
     enclose_loop,
     fair_vertices,
     find_holes,
+    min_weight_triangulation,
     select_holes,
     self_intersections,
 )
@@ -100,11 +102,12 @@ def _edges(T: np.ndarray) -> np.ndarray:
 # ------------------------------------------------------------------------------------------------
 
 
+@pytest.mark.parametrize("method", ["auto", "liepa"])
 @pytest.mark.parametrize("name", list(LOOPS))
-def test_enclose_loop_boundary_orientation_quality(name):
+def test_enclose_loop_boundary_orientation_quality(name, method):
     P = LOOPS[name]()
     k = len(P)
-    patch = enclose_loop(P)
+    patch = enclose_loop(P, method=method)
     X, T = patch.X, patch.T
     assert np.array_equal(X[:k], P)  # loop positions untouched
     # the patch is a valid, consistently oriented, manifold disc...
@@ -124,8 +127,10 @@ def test_enclose_loop_boundary_orientation_quality(name):
     e = e[~((e[:, 0] < k) & (e[:, 1] < k))]
     ratio = np.linalg.norm(X[e[:, 0]] - X[e[:, 1]], axis=1) / h
     assert 0.75 < ratio.mean() < 1.35, ratio.mean()
-    assert np.mean((ratio > 0.5) & (ratio < 2.0)) > 0.98, (ratio.min(), ratio.max())
-    assert patch.method in ("plane", "pca-plane")
+    # (liepa keeps the folds of its coarse surface as edges: a few short ones where they fan out)
+    share = np.mean((ratio > 0.5) & (ratio < 2.0))
+    assert share > (0.98 if method == "auto" else 0.95), (share, ratio.min(), ratio.max())
+    assert patch.method in (("plane", "pca-plane") if method == "auto" else ("liepa",))
 
 
 def test_enclose_planar_loop_stays_planar():
@@ -167,6 +172,17 @@ def test_enclose_loop_edge_length_option_and_triangle():
 def test_enclose_loop_bad_input(P, msg):
     with pytest.raises(MeshRepairError, match=msg):
         enclose_loop(P)
+    with pytest.raises(MeshRepairError, match=msg):
+        enclose_loop(P, method="liepa")
+
+
+def test_enclose_loop_bad_method_and_opposite():
+    with pytest.raises(MeshRepairError, match="method must be one of"):
+        enclose_loop(square_loop(), method="ear")
+    with pytest.raises(MeshRepairError, match="opposite must have shape"):
+        enclose_loop(square_loop(), method="liepa", opposite=np.zeros((3, 3)))
+    with pytest.raises(MeshRepairError, match="forbidden chords"):
+        min_weight_triangulation(square_loop(), forbidden=[[0, 99]])
 
 
 def test_enclose_loop_does_not_modify_input():
@@ -174,6 +190,175 @@ def test_enclose_loop_does_not_modify_input():
     P0 = P.copy()
     enclose_loop(P)
     assert np.array_equal(P, P0)
+
+
+# ------------------------------------------------------------------------------------------------
+# Liepa: minimum-weight triangulation and its refinement
+# ------------------------------------------------------------------------------------------------
+
+
+def _half_edges(T: np.ndarray) -> set[tuple[int, int]]:
+    return set(map(tuple, np.stack([T, np.roll(T, -1, axis=1)], axis=2).reshape(-1, 2).tolist()))
+
+
+def test_min_weight_triangulation_of_a_planar_convex_polygon():
+    rng = np.random.default_rng(3)
+    t = np.sort(rng.uniform(0, 2 * np.pi, 17))
+    Q = np.c_[2.0 * np.cos(t), np.sin(t)]  # convex (points on an ellipse), irregular spacing
+    R = np.linalg.qr(rng.normal(size=(3, 3)))[0]  # in a tilted plane
+    P = np.c_[Q, np.zeros(len(Q))] @ R.T + [1.0, -2.0, 0.5]
+    k = len(P)
+    T = min_weight_triangulation(P)
+    assert T.shape == (k - 2, 3) and T.dtype == np.int64
+    assert len(np.unique(T)) == k
+    # the triangles cover the polygon exactly once: areas add up to the polygon's area...
+    area_poly = 0.5 * abs(np.sum(Q[:, 0] * np.roll(Q[:, 1], -1) - np.roll(Q[:, 0], -1) * Q[:, 1]))
+    c = np.cross(P[T[:, 1]] - P[T[:, 0]], P[T[:, 2]] - P[T[:, 0]])
+    assert 0.5 * np.linalg.norm(c, axis=1).sum() == pytest.approx(area_poly, rel=1e-12)
+    # ...and all face the same way, opposite to the loop's own orientation (Q turns
+    # counter-clockwise about the plane normal R[:, 2])
+    n = R[:, 2]
+    assert (c @ n < 0).all()
+    he = _half_edges(T)
+    for i in range(k):
+        assert ((i + 1) % k, i) in he and (i, (i + 1) % k) not in he
+    rep = check_mesh(P, T)
+    assert rep.n_boundary_loops == 1 and rep.n_components == 1
+
+
+def _folded_loop(fold_deg: float) -> tuple[np.ndarray, np.ndarray]:
+    """Boundary of two unit squares hinged along (0,0,0)-(0,1,0) at ``fold_deg``, and the third
+    vertex of a face continuing each square outwards on every loop edge."""
+    a = np.radians(fold_deg)
+    q = np.array([-np.cos(a), 0, np.sin(a)])
+    c = np.array([[1, 0, 0], [1, 1, 0], [0, 1, 0], q + [0, 1, 0], q, [0, 0, 0]], float)
+    P = _polyline(c, 4)
+    k = len(P)
+    mid = 0.5 * (P + np.roll(P, -1, axis=0))
+    first = ((np.arange(k) < 8) | (np.arange(k) >= 20))[:, None]
+    cen = np.where(first, [0.5, 0.5, 0.0], 0.5 * q + [0.0, 0.5, 0.0])
+    return P, mid + 0.5 * (mid - cen)
+
+
+def test_min_weight_triangulation_avoids_an_existing_edge_as_chord():
+    P, O = _folded_loop(30.0)
+    k = len(P)
+    hinge = (8, 20)  # (0, 1, 0) and (0, 0, 0)
+    assert np.allclose(P[8], [0, 1, 0]) and np.allclose(P[20], 0)
+
+    def edges(T):
+        return set(map(tuple, np.sort(np.r_[T[:, [0, 1]], T[:, [1, 2]], T[:, [2, 0]]],
+                                      axis=1).tolist()))
+
+    # folded 30 degrees, the best triangulation folds along the hinge...
+    assert hinge in edges(min_weight_triangulation(P, opposite=O))
+    # ...but when the hinge is already an edge of the mesh it is never used
+    T = min_weight_triangulation(P, opposite=O, forbidden=np.array([hinge[::-1]]))
+    assert hinge not in edges(T) and T.shape == (k - 2, 3)
+    check_mesh(P, T)
+    # with every chord forbidden there is no alternative: they are allowed again
+    allc = np.array([(i, j) for i in range(k) for j in range(i + 2, k)])
+    assert min_weight_triangulation(P, forbidden=allc).shape == (k - 2, 3)
+
+
+def test_min_weight_triangulation_numpy_twin_agrees(monkeypatch):
+    rng = np.random.default_rng(7)
+    t = np.linspace(0, 2 * np.pi, 41)[:-1]
+    P = np.c_[np.cos(t), np.sin(t), 0.4 * np.cos(2 * t)] + 0.02 * rng.normal(size=(40, 3))
+    O = 0.5 * (P + np.roll(P, -1, axis=0)) * 1.2 + [0, 0, 0.1]
+    O[5] = np.nan  # an edge without a face
+    N0, has0 = H._edge_normals(P, O)
+    forbid = np.zeros((40, 40), bool)
+    forbid[3, 20] = forbid[10, 30] = True
+    r_np = H._np_liepa_dp(P, N0, has0, forbid, H._DP_TOL)
+    with monkeypatch.context() as m:
+        m.setattr(H, "HAVE_NUMBA", False)
+        T_np = min_weight_triangulation(P, opposite=O, forbidden=[[3, 20], [30, 10]])
+    assert T_np.shape == (38, 3)
+    if not H.HAVE_NUMBA:
+        pytest.skip("numba not installed: only the numpy path")
+    r_nb = H._nb_liepa_dp(P, N0, has0, forbid, H._DP_TOL)
+    assert np.array_equal(r_np[0], r_nb[0])
+    fin = np.isfinite(r_np[1])
+    assert np.array_equal(fin, np.isfinite(r_nb[1]))
+    assert np.allclose(r_np[1][fin], r_nb[1][fin], rtol=1e-12, atol=1e-15)
+    assert np.allclose(r_np[2][fin], r_nb[2][fin], rtol=1e-12)
+    T_nb = min_weight_triangulation(P, opposite=O, forbidden=[[3, 20], [30, 10]])
+    assert np.array_equal(np.sort(T_np, axis=0), np.sort(T_nb, axis=0))
+
+
+def _cube(levels: int = 4) -> tuple[np.ndarray, np.ndarray]:
+    import trimesh
+
+    m = trimesh.creation.box(extents=(2, 2, 2))
+    V, F = np.asarray(m.vertices, float), np.asarray(m.faces, np.int64)
+    for _ in range(levels):
+        V, F = trimesh.remesh.subdivide(V, F)
+    return np.asarray(V, float), np.asarray(F, np.int64)
+
+
+def test_liepa_follows_the_faces_round_a_cube_corner():
+    V, F = _cube()
+    c = V[F].mean(axis=1)
+    Vc, Fc = drop_faces(V, F, np.linalg.norm(c - 1.0, axis=1) >= 0.9)  # corner (1, 1, 1) cut
+    holes = find_holes(Vc, Fc)
+    assert len(holes) == 1
+    lp = holes[0].vertices
+    assert all(np.isclose(Vc[lp, j], 1.0).any() for j in range(3))  # on all three faces
+
+    def off_cube(X):  # distance of points inside the cube to its surface
+        return 1.0 - np.abs(X).max(axis=1)
+
+    # the coarse triangulation continues the three faces: its triangles lie almost on the cube
+    P = Vc[lp]
+    T = min_weight_triangulation(P, opposite=H._opposite_points(Vc, Fc, lp))
+    T_blind = min_weight_triangulation(P)
+    d = off_cube(P[T].mean(axis=1)).mean()
+    d_blind = off_cube(P[T_blind].mean(axis=1)).mean()
+    assert d < 0.02 and d < 0.25 * d_blind, (d, d_blind)
+    # the refined patch: on that surface, closed, oriented, no intersections
+    V1, F1, reps = enclose_holes(Vc, Fc, holes, method="liepa")
+    assert reps[0].status == "filled" and reps[0].reason == "liepa"
+    new = np.arange(len(Vc), len(V1))
+    Vp, _, _ = enclose_holes(Vc, Fc, holes, method="auto")
+    d_liepa = off_cube(V1[new]).mean()
+    d_plane = off_cube(Vp[len(Vc):]).mean()
+    assert d_liepa < 0.5 * d_plane, (d_liepa, d_plane)
+    rep = check_mesh(V1, F1)
+    assert rep.is_closed and rep.n_pinched_vertices == 0
+    assert len(self_intersections(V1, F1, np.arange(len(Fc), len(F1)))) == 0
+    V2 = fair_vertices(V1, F1, new, order=2, iterations=3)
+    assert len(self_intersections(V2, F1, np.arange(len(Fc), len(F1)))) == 0
+
+
+def test_liepa_developed_and_mean_value_layouts():
+    # a saddle is developed isometrically: the 2-D layout keeps the loop's edge lengths
+    P = saddle_loop()
+    k = len(P)
+    patch = enclose_loop(P, method="liepa")
+    el3 = np.linalg.norm(P - np.roll(P, -1, axis=0), axis=1)
+    el2 = np.linalg.norm(patch.uv[:k] - np.roll(patch.uv[:k], -1, axis=0), axis=1)
+    assert np.allclose(el2, el3, rtol=1e-9)
+    # a loop waving 2 up and down four times: the development overlaps itself, so the
+    # subdivided surface is laid out on the unit disc by mean-value coordinates
+    t = np.linspace(0, 2 * np.pi, 121)[:-1]
+    P = np.c_[np.cos(t), np.sin(t), 2.0 * np.cos(4 * t)]
+    k = len(P)
+    patch = enclose_loop(P, method="liepa")
+    assert np.allclose(np.linalg.norm(patch.uv[:k], axis=1), 1.0)
+    X, T = patch.X, patch.T
+    assert np.array_equal(X[:k], P)
+    rep = check_mesh(X, T)
+    assert rep.n_boundary_loops == 1 and rep.n_components == 1 and rep.n_pinched_vertices == 0
+    assert sorted(boundary_loops(T, len(X))[0].tolist()) == list(range(k))
+    he = _half_edges(T)
+    assert all(((i + 1) % k, i) in he for i in range(k))
+    assert len(self_intersections(X, T)) == 0
+    # anisotropic, but the edge lengths stay near the target
+    h = np.linalg.norm(P - np.roll(P, -1, axis=0), axis=1).mean()
+    e = _edges(T)
+    ratio = np.linalg.norm(X[e[:, 0]] - X[e[:, 1]], axis=1) / h
+    assert 0.6 < np.median(ratio) < 1.5, np.median(ratio)
 
 
 # ------------------------------------------------------------------------------------------------
@@ -202,7 +387,8 @@ def test_enclose_holes_orientation_consistent_with_mesh():
     assert reps[1].n_new_vertices == len(V1) - len(Vh)
 
 
-def test_chords_never_duplicate_an_existing_edge():
+@pytest.mark.parametrize("method", ["auto", "liepa"])
+def test_chords_never_duplicate_an_existing_edge(method):
     # open pyramid: square hole 0-1-2-3; two flaps make both diagonals (0, 2) and (1, 3) existing
     # edges, so any 2-triangle fill of the square would give an edge 3 faces
     V = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0], [0.5, 0.5, -1],
@@ -213,8 +399,9 @@ def test_chords_never_duplicate_an_existing_edge():
     square = [h for h in holes if sorted(h.vertices.tolist()) == [0, 1, 2, 3]]
     assert len(square) == 1
     skip = {h.index: "not this one" for h in holes if h is not square[0]}
-    V1, F1, reps = enclose_holes(V, F, holes, skip, edge_length=2.0, check=False)
+    V1, F1, reps = enclose_holes(V, F, holes, skip, edge_length=2.0, check=False, method=method)
     assert reps[square[0].index].status == "filled"
+    assert reps[square[0].index].reason == ("plane" if method == "auto" else "liepa")
     assert edge_topology(F1, len(V1)).edge_counts.max() == 2
     assert len(V1) > len(V)  # a chord was split at its midpoint
 

@@ -7,7 +7,10 @@ Pipeline of :func:`fill_holes`:
    the intended border kept (``keep_border``), ``exclude`` / ``holes`` / ``max_hole_size``.
 2. *Trivial enclosing*: each selected loop gets a triangulated patch whose boundary is exactly the
    loop, with interior edges matching the loop's edge length and a membrane initial position
-   (:func:`meshrepair.holes.enclose_holes`). The new vertices form the region ``S_D``.
+   (:func:`meshrepair.holes.enclose_holes`). The new vertices form the region ``S_D``. A hole
+   whose patch intersects the surface (faired and membrane) is enclosed again with the next
+   method of :data:`ENCLOSE_ORDER` (Liepa's minimum-weight triangulation, faired, then on its
+   own surface) before it is refused.
 3. *Initial position* (``initial``): ``"bilaplacian"`` (default) moves the new vertices to the
    bi-Laplacian (thin-plate) fairing with the surrounding 1-ring as Dirichlet data, which continues
    the surrounding curvature into the hole; ``"harmonic"`` keeps the flat membrane.
@@ -38,7 +41,14 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .errors import MeshRepairError
-from .holes import HoleReport, enclose_holes, fair_vertices, select_holes, self_intersections
+from .holes import (
+    LIEPA_MAX_LOOP,
+    HoleReport,
+    enclose_holes,
+    fair_vertices,
+    select_holes,
+    self_intersections,
+)
 from .solver import ADMMSolver, SolverOptions, Stage
 from .topology import edge_topology
 
@@ -47,6 +57,23 @@ log = logging.getLogger(__name__)
 __all__ = ["FillResult", "fill_holes", "inpaint", "region_mask"]
 
 INITIAL_MODES = ("bilaplacian", "harmonic")
+
+ENCLOSE_ORDER: tuple[str, ...] = ("auto", "liepa")
+"""Enclosing methods (:func:`meshrepair.holes.enclose_loop`) in the order they are tried on a
+hole: the next one when the patch of the previous one intersects the surface both faired and
+unfaired. ``"auto"``: planar projection + membrane; ``"liepa"``: Liepa's minimum-weight
+triangulation refined on its own surface (loops up to :data:`meshrepair.holes.LIEPA_MAX_LOOP`
+vertices). Planar first: Liepa first was less accurate after fairing on the smooth benchmark
+cases (docs/holes.md, section 6)."""
+
+_METHOD_NAMES = {"auto": "planar projection", "liepa": "minimum-weight triangulation"}
+
+
+def _enclose_methods(hole) -> list[str]:
+    """Enclosing methods to try on ``hole``, in order (``"liepa"`` only up to
+    :data:`meshrepair.holes.LIEPA_MAX_LOOP` boundary vertices)."""
+    out = [m for m in ENCLOSE_ORDER if m != "liepa" or hole.n_boundary <= LIEPA_MAX_LOOP]
+    return out or ["auto"]
 
 
 @dataclass
@@ -207,33 +234,59 @@ def _fill_core(V: np.ndarray, F: np.ndarray, holes, skip: dict[int, str], *, den
 
     t0 = time.perf_counter()
     nV, nF = len(V), len(F)
-    V1, F1, reports = enclose_holes(V, F, holes, skip, edge_length=edge_length, check=check,
-                                    intersections=False)
-    t1 = time.perf_counter()
-    Vm = V1
-    if initial == "bilaplacian" and len(V1) > nV:
-        V1 = fair_vertices(V1, F1, np.arange(nV, len(V1)), order=2, weights="cotan",
-                           iterations=3)
-    if check:
+    by_index = {h.index: h for h in holes}
+    stage: dict[int, int] = {}  # hole index -> position in its list of enclosing methods
+    t_enclose = t_initial = 0.0
+    while True:
+        ta = time.perf_counter()
+        method = {h.index: _enclose_methods(h)[stage.get(h.index, 0)] for h in holes}
+        V1, F1, reports = enclose_holes(V, F, holes, skip, edge_length=edge_length, check=check,
+                                        intersections=False, method=method)
+        tb = time.perf_counter()
+        Vm = V1
+        if initial == "bilaplacian" and len(V1) > nV:
+            V1 = fair_vertices(V1, F1, np.arange(nV, len(V1)), order=2, weights="cotan",
+                               iterations=3)
         drop: dict[int, str] = {}
-        dropped = np.zeros(len(F1), bool)  # faces of patches already refused
-        for i, (bv, bf) in _blocks(reports, nV, nF).items():
-            n_x = _intersecting(V1, F1, bf, dropped)
-            if n_x and initial == "bilaplacian":
-                log.info("hole %d: the faired patch intersects the mesh; using the membrane", i)
-                V1 = V1.copy()
-                V1[bv] = Vm[bv]
+        retry: list[int] = []
+        if check:
+            dropped = np.zeros(len(F1), bool)  # faces of patches already refused
+            for i, (bv, bf) in _blocks(reports, nV, nF).items():
+                rep = next(r for r in reports if r.index == i)
                 n_x = _intersecting(V1, F1, bf, dropped)
+                if n_x and initial == "bilaplacian":
+                    unfaired = "unfaired" if method[i] == "liepa" else "membrane"
+                    log.info("hole %d: the faired patch intersects the mesh; using the %s", i,
+                             "unfaired surface" if unfaired == "unfaired" else "membrane")
+                    V1 = V1.copy()
+                    V1[bv] = Vm[bv]
+                    n_x = _intersecting(V1, F1, bf, dropped)
+                    if not n_x:
+                        rep.reason += f", {unfaired}"
                 if not n_x:
-                    next(r for r in reports if r.index == i).reason += ", membrane"
-            if n_x:
+                    continue
                 dropped[bf] = True
-                drop[i] = (f"the patch would intersect the surface ({n_x} face pairs): the loop "
-                           "is too twisted for a direct fill (e.g. it wraps round a thin wall or "
-                           "is the border of an open scan: use keep_border); exclude it or fill "
-                           "it manually")
-        if drop:
-            V1, F1 = _drop_patches(V1, F1, reports, nV, nF, drop)
+                nxt = stage.get(i, 0) + 1
+                if nxt < len(_enclose_methods(by_index[i])) and not rep.reason.startswith(
+                        "annulus"):
+                    log.info("hole %d: the %s patch intersects the mesh (%d face pairs); "
+                             "trying %s", i, method[i], n_x, _enclose_methods(by_index[i])[nxt])
+                    retry.append(i)
+                    continue
+                tried = ", ".join(_METHOD_NAMES[m] for m in _enclose_methods(by_index[i])
+                                  ) if not rep.reason.startswith("annulus") else "annulus"
+                drop[i] = (f"the patch would intersect the surface ({n_x} face pairs; tried: "
+                           f"{tried}): the loop is too twisted for a direct fill (e.g. it wraps "
+                           "round a thin wall or is the border of an open scan: use "
+                           "keep_border); exclude it or fill it manually")
+        t_enclose += tb - ta
+        t_initial += time.perf_counter() - tb
+        if not retry:
+            break
+        for i in retry:
+            stage[i] = stage.get(i, 0) + 1
+    if drop:
+        V1, F1 = _drop_patches(V1, F1, reports, nV, nF, drop)
     t2 = time.perf_counter()
     new_v = np.arange(nV, len(V1), dtype=np.int64)
     new_f = np.arange(nF, len(F1), dtype=np.int64)
@@ -306,7 +359,7 @@ def _fill_core(V: np.ndarray, F: np.ndarray, holes, skip: dict[int, str], *, den
         history=history, holes=reports, new_vertices=new_v, new_faces=new_f,
         vertex_map=np.arange(nV, dtype=np.int64), iterations=iterations,
         stop_reason=stop_reason, params=params,
-        timings={"enclose": t1 - t0, "initial": t2 - t1, "solve": t3 - t2,
+        timings={"enclose": t_enclose, "initial": t_initial, "solve": t3 - t2,
                  "total": time.perf_counter() - t0},
     )
 
@@ -391,7 +444,10 @@ def fill_holes(
     inner_solver, inner_iters : V-subproblem solver and its iterations per ADMM iteration.
     check : bool
         Refuse patches that would intersect or lie on the surface, and count intersections of the
-        final patches (``HoleReport.n_intersections``).
+        final patches (``HoleReport.n_intersections``). A patch that intersects is tried
+        faired, then unfaired, then with the next enclosing method of :data:`ENCLOSE_ORDER`
+        (``HoleReport.reason`` says which was kept: e.g. ``"plane"``, ``"plane, membrane"``,
+        ``"liepa"``, ``"liepa, unfaired"``) before the hole is refused.
     callback : called with each ADMM history entry.
 
     Returns

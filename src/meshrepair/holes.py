@@ -21,6 +21,16 @@ so every hole visits each of its vertices once.
    planar triangulation). The patch traverses every loop edge in the opposite direction, so it is
    consistently oriented with the rest of the mesh.
 
+``enclose_loop(P, method="liepa")`` is the fallback for loops no planar view serves (a reflex
+spike of the surround poking into the hole, a hole straddling a sharp crease, a loop wrapping
+round a thin wall): :func:`min_weight_triangulation` (Liepa 2003, as in CGAL's
+``triangulate_hole`` and MeshLab) triangulates the loop without new vertices, minimising the
+largest dihedral angle (against the faces on the loop edges too), then the area, by an O(k³)
+dynamic program (numba kernel, numpy twin); that coarse surface is developed isometrically into
+the plane (or, when the development overlaps itself, subdivided and laid out on the unit disc by
+mean-value coordinates), meshed by Triangle to the edge length and every new vertex placed back on
+the coarse surface, which follows the surrounding faces.
+
 :func:`enclose_holes` encloses several holes of one mesh at once (appending the new vertices and
 faces), removes chords that would duplicate an existing edge, fills an annulus when a loop is an
 island inside another hole, and refuses patches that would intersect or lie on the surface.
@@ -34,14 +44,18 @@ to check patches.
 from __future__ import annotations
 
 import logging
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
 import scipy.sparse as sp
 
+from ._kernels import HAVE_NUMBA
 from .errors import MeshRepairError
 from .topology import boundary_loops, connected_components, edge_topology
+
+if HAVE_NUMBA:
+    from numba import njit
 
 log = logging.getLogger(__name__)
 
@@ -53,12 +67,16 @@ __all__ = [
     "enclose_loop",
     "fair_vertices",
     "find_holes",
+    "min_weight_triangulation",
     "select_holes",
     "self_intersections",
 ]
 
 MIN_ANGLE = 28.0
 """Minimum angle (degrees) asked of the 2-D constrained Delaunay triangulation."""
+
+ENCLOSE_METHODS = ("auto", "liepa")
+"""Ways :func:`enclose_loop` can triangulate a loop."""
 
 
 # ------------------------------------------------------------------------------------------------
@@ -113,8 +131,9 @@ class HoleReport:
     status : str
         ``"filled"`` or ``"skipped"``.
     reason : str
-        Why it was skipped, or how it was filled (e.g. ``"plane"``, ``"disc"``, ``"annulus with
-        hole 3"``).
+        Why it was skipped, or how it was filled (e.g. ``"plane"``, ``"disc"``, ``"liepa"``,
+        ``"annulus with hole 3"``; :func:`meshrepair.fill.fill_holes` appends ``", membrane"`` or
+        ``", unfaired"`` when the faired patch intersected and the initial one was kept).
     n_new_vertices, n_new_faces : int
         Size of the patch (0 when skipped).
     loop : (k,) int64
@@ -368,6 +387,14 @@ def _harmonic(W: sp.csr_matrix, known: np.ndarray, values: np.ndarray) -> np.nda
     return out
 
 
+def _area_switch(max_area: float) -> str:
+    """Triangle's ``a`` switch for a maximum triangle area, in positional notation: Triangle
+    reads only digits and '.', so ``a6.3e-05`` would mean an area bound of 6.3 (and then the
+    switches ``e`` and ``-``), leaving loops of small meshes unrefined."""
+    return "a" + np.format_float_positional(float(max_area), precision=12, fractional=False,
+                                            trim="-")
+
+
 def _triangulate(Q: np.ndarray, segments: np.ndarray, max_area: float | None,
                  holes: np.ndarray | None = None, quality: bool = True) -> tuple[np.ndarray,
                                                                                   np.ndarray]:
@@ -380,7 +407,7 @@ def _triangulate(Q: np.ndarray, segments: np.ndarray, max_area: float | None,
     if quality:
         opts += f"q{MIN_ANGLE:g}"
     if max_area is not None:
-        opts += f"a{max_area:.12g}"
+        opts += _area_switch(max_area)
     out = triangle.triangulate(data, opts)
     X = np.asarray(out["vertices"], dtype=np.float64)
     T = np.asarray(out.get("triangles", np.empty((0, 3))), dtype=np.int64).reshape(-1, 3)
@@ -420,7 +447,8 @@ class Patch:
     uv : (k + m, 2) float64
         The 2-D domain the patch was triangulated in.
     method : str
-        ``"triangle"`` (3-loop), ``"plane"``, ``"pca-plane"``, ``"disc"`` or ``"annulus"``.
+        ``"triangle"`` (3-loop), ``"plane"``, ``"pca-plane"``, ``"disc"``, ``"annulus"`` or
+        ``"liepa"``.
     n_loop : int
         Number of loop vertices ``k`` (for an annulus, outer + inner).
     """
@@ -452,7 +480,9 @@ def _orient_patch(T: np.ndarray, k: int) -> np.ndarray:
     return T
 
 
-def enclose_loop(P: np.ndarray, *, edge_length: float | None = None) -> Patch:
+def enclose_loop(P: np.ndarray, *, edge_length: float | None = None, method: str = "auto",
+                 opposite: np.ndarray | None = None,
+                 forbidden: np.ndarray | None = None) -> Patch:
     """Triangulate the hole bounded by the closed 3-D polygon ``P``.
 
     Parameters
@@ -461,20 +491,34 @@ def enclose_loop(P: np.ndarray, *, edge_length: float | None = None) -> Patch:
         Loop positions in the order of :attr:`Hole.vertices`.
     edge_length : float, optional
         Target interior edge length (default: the loop's mean edge length).
+    method : ``"auto"`` or ``"liepa"``
+        ``"auto"``: a planar view of the loop (vector-area plane, least-squares plane, else the
+        unit disc) meshed by Triangle, interior vertices on the harmonic membrane.
+        ``"liepa"``: :func:`min_weight_triangulation` of the loop (minimal largest dihedral
+        angle, then area, against the faces in ``opposite``), refined to the edge length on that
+        surface (see :func:`_enclose_liepa`); follows the surrounding faces where the loop is far
+        from planar.
+    opposite : (k, 3) float, optional
+        ``"liepa"`` only: third vertex of the existing face on each loop edge.
+    forbidden : (q, 2) int, optional
+        ``"liepa"`` only: local index pairs that are existing edges (not to be used as chords).
 
     Returns
     -------
     Patch
         The first ``k`` rows of ``Patch.X`` are ``P``; ``Patch.T`` traverses every loop edge
         backwards, so the patch is consistently oriented with the faces that border the loop. The
-        interior vertices are the harmonic interpolation of ``P`` (a membrane); use
-        :func:`fair_vertices` for a curved fill.
+        interior vertices are the harmonic interpolation of ``P`` (a membrane) or lie on the
+        minimum-weight triangulation (``"liepa"``); use :func:`fair_vertices` for a curved fill.
 
     Raises
     ------
     MeshRepairError
-        If the loop has fewer than 3 vertices, repeated or non-finite positions.
+        If the loop has fewer than 3 vertices, repeated or non-finite positions, or for an
+        unknown ``method``.
     """
+    if method not in ENCLOSE_METHODS:
+        raise MeshRepairError(f"method must be one of {ENCLOSE_METHODS}, got {method!r}")
     P = np.asarray(P, dtype=np.float64)
     if P.ndim != 2 or P.shape[1] != 3 or len(P) < 3:
         raise MeshRepairError(f"a hole loop needs at least 3 vertices of shape (k, 3), got "
@@ -493,6 +537,8 @@ def enclose_loop(P: np.ndarray, *, edge_length: float | None = None) -> Patch:
     if k == 3:
         return Patch(X=P.copy(), T=np.array([[0, 2, 1]], dtype=np.int64),
                      uv=np.zeros((3, 2)), method="triangle", n_loop=3)
+    if method == "liepa":
+        return _enclose_liepa(P, h, opposite, forbidden)
     segs = np.c_[np.arange(k), (np.arange(k) + 1) % k]
     c = P.mean(axis=0)
     candidates: list[tuple[str, np.ndarray]] = []
@@ -586,6 +632,581 @@ def _enclose_annulus(Po: np.ndarray, Pi: np.ndarray, h: float) -> Patch | None:
 
 
 # ------------------------------------------------------------------------------------------------
+# Liepa's minimum-weight triangulation of the loop and its refinement
+# ------------------------------------------------------------------------------------------------
+
+LIEPA_MAX_LOOP = 1000
+"""Largest loop (boundary vertices) :func:`meshrepair.fill.fill_holes` encloses with the O(k³)
+dynamic program of :func:`min_weight_triangulation` (about 2 s and 90 MB at this size)."""
+
+_DP_TOL = 1e-12
+"""Bends ``1 - cos(dihedral angle)`` closer than this count as equal in the lexicographic
+weight (angles of about 1e-6 rad and below are not told apart: the area decides)."""
+
+
+def _np_liepa_dp(P: np.ndarray, N0: np.ndarray, has0: np.ndarray, forbid: np.ndarray,
+                 tol: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Liepa's dynamic program (numpy twin of ``_nb_liepa_dp``, vectorised over each diagonal).
+
+    For ``i < j`` the sub-polygon ``i, i+1, ..., j`` closed by the chord ``(i, j)`` is
+    triangulated with the triangle ``(i, j, m)`` (patch orientation) on that chord and the best
+    triangulations of ``[i, m]`` and ``[m, j]``. Its weight is (largest bend, total area), where
+    the bend of two consistently oriented adjacent triangles is ``1 - cos`` of their dihedral
+    angle (monotone in the angle, cheaper than ``arccos``); the triangle on ``(i, j)`` is compared
+    with the triangles of the sub-solutions on ``(i, m)`` and ``(m, j)`` or, for a loop edge,
+    with the existing face there. Candidates are compared by bend (within ``tol``), then area.
+
+    Parameters
+    ----------
+    P : (k, 3) float64
+        Loop positions.
+    N0 : (k, 3) float64
+        Unit normal of the existing face on loop edge ``(i, i+1)`` (edge ``k-1`` closes the loop).
+    has0 : (k,) bool
+        Which loop edges have such a face.
+    forbid : (k, k) bool
+        ``forbid[i, j]`` (``i < j``): the chord ``(i, j)`` must not be used.
+    tol : float
+        Bends closer than this are equal.
+
+    Returns
+    -------
+    opt : (k, k) int64
+        Best apex ``m`` of the sub-polygon ``[i, j]`` (-1 where infeasible or unused).
+    bend, area : (k, k) float64
+        Its weight (``inf`` where infeasible); ``[0, k-1]`` is the whole loop.
+    """
+    k = len(P)
+    bend = np.full((k, k), np.inf)
+    area = np.full((k, k), np.inf)
+    opt = np.full((k, k), -1, np.int64)
+    nrm = np.zeros((k, k, 3))
+    hasn = np.zeros((k, k), bool)
+    i1 = np.arange(k - 1)
+    bend[i1, i1 + 1] = 0.0
+    area[i1, i1 + 1] = 0.0
+    nrm[i1, i1 + 1] = N0[:-1]
+    hasn[i1, i1 + 1] = has0[:-1]
+    deg = 1e-12 * float(np.ptp(P, axis=0).max()) ** 2
+    for d in range(2, k):
+        ii = np.arange(k - d)
+        jj = ii + d
+        mm = ii[:, None] + np.arange(1, d)[None, :]  # (n, d-1)
+        I = np.broadcast_to(ii[:, None], mm.shape)
+        J = np.broadcast_to(jj[:, None], mm.shape)
+        e, f = P[J] - P[I], P[mm] - P[I]
+        n = np.stack([e[..., 1] * f[..., 2] - e[..., 2] * f[..., 1],
+                      e[..., 2] * f[..., 0] - e[..., 0] * f[..., 2],
+                      e[..., 0] * f[..., 1] - e[..., 1] * f[..., 0]], axis=-1)
+        q = np.sqrt(n[..., 0] * n[..., 0] + n[..., 1] * n[..., 1] + n[..., 2] * n[..., 2])
+        good = q > deg
+        nu = np.where(good[..., None], n / np.where(good, q, 1.0)[..., None], 0.0)
+        c1 = np.where(hasn[I, mm], 1.0 - np.einsum("...i,...i->...", nu, nrm[I, mm]), 0.0)
+        c2 = np.where(hasn[mm, J], 1.0 - np.einsum("...i,...i->...", nu, nrm[mm, J]), 0.0)
+        a = np.maximum(np.maximum(bend[I, mm], bend[mm, J]), np.maximum(c1, c2))
+        if d == k - 1 and has0[k - 1]:
+            a = np.maximum(a, 1.0 - nu @ N0[k - 1])
+        a = np.where(good, a, 2.0)
+        a = np.where(np.isfinite(bend[I, mm]) & np.isfinite(bend[mm, J]), a, np.inf)
+        s = 0.5 * q + area[I, mm] + area[mm, J]
+        best = a.min(axis=1)
+        s = np.where(a <= best[:, None] + tol, s, np.inf)
+        b = np.argmin(s, axis=1)
+        r = np.arange(len(ii))
+        ok = np.isfinite(best) & ~forbid[ii, jj]
+        ii, jj, b, r = ii[ok], jj[ok], b[ok], r[ok]
+        bend[ii, jj] = best[ok]
+        area[ii, jj] = s[r, b]
+        opt[ii, jj] = mm[r, b]
+        nrm[ii, jj] = nu[r, b]
+        hasn[ii, jj] = good[r, b]
+    return opt, bend, area
+
+
+if HAVE_NUMBA:
+
+    @njit(cache=True)
+    def _nb_liepa_dp(P, N0, has0, forbid, tol):  # pragma: no cover - compiled
+        """Liepa's dynamic program, O(k³): see :func:`_np_liepa_dp` (same results)."""
+        k = P.shape[0]
+        # row i of bend/area/nrm holds the sub-polygons [i, j]; row j of the transposed copies
+        # (bendT, areaT, nrmT) the sub-polygons [m, j], so the inner loop reads contiguously
+        bend = np.full((k, k), np.inf)
+        area = np.full((k, k), np.inf)
+        bendT = np.full((k, k), np.inf)
+        areaT = np.full((k, k), np.inf)
+        opt = np.full((k, k), -1, np.int64)
+        nrm = np.zeros((k, k, 3))
+        nrmT = np.zeros((k, k, 3))
+        hasn = np.zeros((k, k), np.bool_)
+        hasnT = np.zeros((k, k), np.bool_)
+        for i in range(k - 1):
+            hasn[i, i + 1] = has0[i]
+            hasnT[i + 1, i] = has0[i]
+            bend[i, i + 1] = 0.0
+            area[i, i + 1] = 0.0
+            bendT[i + 1, i] = 0.0
+            areaT[i + 1, i] = 0.0
+            for c in range(3):
+                nrm[i, i + 1, c] = N0[i, c]
+                nrmT[i + 1, i, c] = N0[i, c]
+        lmax = 0.0
+        for c in range(3):
+            lmax = max(lmax, P[:, c].max() - P[:, c].min())
+        deg = 1e-12 * lmax * lmax
+        ca = np.empty(k)
+        cs = np.empty(k)
+        cn = np.empty((k, 3))
+        cg = np.empty(k, np.bool_)
+        for d in range(2, k):
+            for i in range(k - d):
+                j = i + d
+                if forbid[i, j]:
+                    continue
+                ex = P[j, 0] - P[i, 0]
+                ey = P[j, 1] - P[i, 1]
+                ez = P[j, 2] - P[i, 2]
+                best = np.inf
+                for t in range(d - 1):
+                    m = i + 1 + t
+                    b1 = bend[i, m]
+                    b2 = bendT[j, m]
+                    ca[t] = np.inf
+                    if b1 == np.inf or b2 == np.inf:
+                        continue
+                    fx = P[m, 0] - P[i, 0]
+                    fy = P[m, 1] - P[i, 1]
+                    fz = P[m, 2] - P[i, 2]
+                    nx = ey * fz - ez * fy
+                    ny = ez * fx - ex * fz
+                    nz = ex * fy - ey * fx
+                    q = np.sqrt(nx * nx + ny * ny + nz * nz)
+                    if q > deg:
+                        nx /= q
+                        ny /= q
+                        nz /= q
+                        a = max(b1, b2)
+                        if hasn[i, m]:
+                            a = max(a, 1.0 - (nx * nrm[i, m, 0] + ny * nrm[i, m, 1]
+                                              + nz * nrm[i, m, 2]))
+                        if hasnT[j, m]:
+                            a = max(a, 1.0 - (nx * nrmT[j, m, 0] + ny * nrmT[j, m, 1]
+                                              + nz * nrmT[j, m, 2]))
+                        if d == k - 1 and has0[k - 1]:
+                            a = max(a, 1.0 - (nx * N0[k - 1, 0] + ny * N0[k - 1, 1]
+                                              + nz * N0[k - 1, 2]))
+                    else:
+                        nx = ny = nz = 0.0
+                        a = 2.0
+                    ca[t] = a
+                    cs[t] = 0.5 * q + area[i, m] + areaT[j, m]
+                    cn[t, 0] = nx
+                    cn[t, 1] = ny
+                    cn[t, 2] = nz
+                    cg[t] = q > deg
+                    if a < best:
+                        best = a
+                if best == np.inf:
+                    continue
+                bt = -1
+                bs = np.inf
+                for t in range(d - 1):
+                    if ca[t] <= best + tol and cs[t] < bs:
+                        bs = cs[t]
+                        bt = t
+                bend[i, j] = best
+                bendT[j, i] = best
+                area[i, j] = bs
+                areaT[j, i] = bs
+                opt[i, j] = i + 1 + bt
+                for c in range(3):
+                    nrm[i, j, c] = cn[bt, c]
+                    nrmT[j, i, c] = cn[bt, c]
+                hasn[i, j] = cg[bt]
+                hasnT[j, i] = cg[bt]
+        return opt, bend, area
+
+
+def _edge_normals(P: np.ndarray, opposite: np.ndarray | None) -> tuple[np.ndarray, np.ndarray]:
+    """Unit normals of the existing faces ``(P_i, P_i+1, O_i)`` on the loop edges, ``(k, 3)``,
+    and which of them exist (finite, non-degenerate)."""
+    k = len(P)
+    if opposite is None:
+        return np.zeros((k, 3)), np.zeros(k, bool)
+    O = np.asarray(opposite, dtype=np.float64)
+    if O.shape != (k, 3):
+        raise MeshRepairError(f"opposite must have shape ({k}, 3) (one point per loop edge), got "
+                              f"{O.shape}")
+    Pn = np.roll(P, -1, axis=0)
+    n = np.cross(Pn - P, O - P)
+    q = np.linalg.norm(n, axis=1)
+    lmax = float(np.ptp(P, axis=0).max())
+    ok = np.isfinite(q) & (q > 1e-12 * lmax * lmax)
+    N = np.zeros((k, 3))
+    N[ok] = n[ok] / q[ok, None]
+    return N, ok
+
+
+def min_weight_triangulation(P: np.ndarray, *, opposite: np.ndarray | None = None,
+                             forbidden: np.ndarray | None = None) -> np.ndarray:
+    """Liepa's minimum-weight triangulation of a closed 3-D polygon (no new vertices).
+
+    Dynamic program over the sub-polygons ``i, i+1, ..., j`` (O(k³) time, O(k²) memory; a numba
+    kernel, or numpy vectorised over each diagonal when numba is unavailable or
+    ``MESHREPAIR_NO_NUMBA=1``). The weight of a triangle set is lexicographic: first the largest
+    dihedral angle between adjacent triangles, including the existing face on each loop edge
+    (``opposite``), then the total area (Liepa 2003, "Filling holes in meshes"; the weight of
+    CGAL's ``triangulate_hole``). It therefore follows the surrounding faces instead of a
+    projection plane.
+
+    Parameters
+    ----------
+    P : (k, 3) float, k >= 3
+        Loop positions in the order of :attr:`Hole.vertices`.
+    opposite : (k, 3) float, optional
+        Third vertex of the existing face ``(P_i, P_i+1, opposite_i)`` on each loop edge (rows
+        of NaN where there is none); without it only the angles inside the patch count.
+    forbidden : (q, 2) int, optional
+        Local index pairs that must not become chords (they are edges of the mesh already and
+        would get a third face). Ignored when no triangulation avoids them all.
+
+    Returns
+    -------
+    (k - 2, 3) int64
+        Triangles in local indices, ``(i, j, m)`` with ``i < m < j``: every loop edge ``(i, i+1)``
+        is traversed as ``(i+1, i)``, like :attr:`Patch.T`.
+
+    Raises
+    ------
+    MeshRepairError
+        For a loop of fewer than 3 vertices or non-finite positions.
+    """
+    P = np.ascontiguousarray(P, dtype=np.float64)
+    if P.ndim != 2 or P.shape[1] != 3 or len(P) < 3:
+        raise MeshRepairError(f"a hole loop needs at least 3 vertices of shape (k, 3), got "
+                              f"{P.shape}")
+    if not np.isfinite(P).all():
+        raise MeshRepairError("the hole loop has non-finite vertex positions")
+    k = len(P)
+    N0, has0 = _edge_normals(P, opposite)
+    forbid = np.zeros((k, k), bool)
+    if forbidden is not None and len(forbidden):
+        fb = np.asarray(forbidden, dtype=np.int64).reshape(-1, 2)
+        if (fb < 0).any() or (fb >= k).any():
+            raise MeshRepairError(f"forbidden chords must be local loop indices in [0, {k})")
+        lo, hi = fb.min(axis=1), fb.max(axis=1)
+        chord = (hi - lo >= 2) & ~((lo == 0) & (hi == k - 1))
+        forbid[lo[chord], hi[chord]] = True
+    dp = _nb_liepa_dp if HAVE_NUMBA else _np_liepa_dp
+    opt, bend, _ = dp(P, N0, has0, forbid, _DP_TOL)
+    if not np.isfinite(bend[0, k - 1]):
+        log.info("no triangulation of the %d-loop avoids the existing edges; allowing them", k)
+        opt, bend, _ = dp(P, N0, has0, np.zeros((k, k), bool), _DP_TOL)
+    T = []
+    stack = [(0, k - 1)]
+    while stack:
+        i, j = stack.pop()
+        if j - i < 2:
+            continue
+        m = int(opt[i, j])
+        T.append((i, j, m))
+        stack += [(i, m), (m, j)]
+    return np.asarray(T, dtype=np.int64).reshape(-1, 3)
+
+
+def _tri_angles(P: np.ndarray, T: np.ndarray) -> np.ndarray:
+    """Corner angles ``(t, 3)`` of the triangles ``T`` of ``P``."""
+    out = np.empty(T.shape)
+    for c in range(3):
+        u = P[T[:, (c + 1) % 3]] - P[T[:, c]]
+        v = P[T[:, (c + 2) % 3]] - P[T[:, c]]
+        out[:, c] = np.arctan2(np.linalg.norm(np.cross(u, v), axis=1), np.einsum("ij,ij->i", u, v))
+    return out
+
+
+def _unfold(P: np.ndarray, T: np.ndarray) -> np.ndarray | None:
+    """Isometric development of a triangulated polygon (all vertices on the loop) into the plane.
+
+    The triangles are laid out along the dual tree, each reflected across the chord it shares
+    with its parent, so every triangle keeps its 3-D shape. Returns the ``(k, 2)`` positions, or
+    None when the development overlaps itself (the loop's 2-D image is not simple, or the
+    triangles round a loop vertex span 360° or more).
+    """
+    k = len(P)
+    nt = len(T)
+    by_edge: dict[tuple[int, int], list[int]] = {}
+    for t, tri in enumerate(T.tolist()):
+        for c in range(3):
+            a, b = tri[c], tri[(c + 1) % 3]
+            by_edge.setdefault((min(a, b), max(a, b)), []).append(t)
+    X = np.full((k, 2), np.nan)
+    i, j, m = T[0]
+    e = P[j] - P[i]
+    le = float(np.linalg.norm(e))
+    if not le > 0:
+        return None
+    X[i] = 0.0
+    X[j] = (le, 0.0)
+    f = P[m] - P[i]
+    X[m] = (float(f @ e) / le, float(np.linalg.norm(np.cross(e, f))) / le)
+    done = np.zeros(nt, bool)
+    done[0] = True
+    queue = [0]
+    while queue:
+        t = queue.pop()
+        tri = T[t].tolist()
+        for c in range(3):
+            a, b = tri[c], tri[(c + 1) % 3]
+            for u in by_edge[(min(a, b), max(a, b))]:
+                if done[u]:
+                    continue
+                done[u] = True
+                nb = T[u].tolist()
+                r = nb.index(b)  # the shared edge is traversed b -> a in the neighbour
+                p, q, w = nb[r], nb[(r + 1) % 3], nb[(r + 2) % 3]
+                e3 = P[q] - P[p]
+                le = float(np.linalg.norm(e3))
+                if not le > 0:
+                    return None
+                f3 = P[w] - P[p]
+                x = float(f3 @ e3) / le
+                y = float(np.linalg.norm(np.cross(e3, f3))) / le
+                d2 = (X[q] - X[p]) / le
+                X[w] = X[p] + x * d2 + y * np.array([-d2[1], d2[0]])
+                queue.append(u)
+    if not (done.all() and np.isfinite(X).all()):
+        return None
+    # every corner angle at a loop vertex must add up to less than a full turn
+    ang = _tri_angles(P, T)
+    total = np.bincount(T.ravel(), ang.ravel(), minlength=k)
+    if (total >= 2 * np.pi - 1e-6).any():
+        return None
+    d1, d2 = X[T[:, 1]] - X[T[:, 0]], X[T[:, 2]] - X[T[:, 0]]
+    area2 = d1[:, 0] * d2[:, 1] - d1[:, 1] * d2[:, 0]
+    if not (area2 > 1e-12 * float(np.ptp(X, axis=0).max()) ** 2).all():
+        return None
+    if not _polygon_is_simple(X):
+        return None
+    return X
+
+
+def _locate(Q: np.ndarray, Tc: np.ndarray, pts: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Coarse triangle of ``Tc`` (a planar layout ``Q``) containing each point, ``(n,)``, and the
+    barycentric coordinates ``(n, 3)`` (clipped to the triangle for points on its border)."""
+    from matplotlib.tri import Triangulation
+
+    try:
+        finder = Triangulation(Q[:, 0], Q[:, 1], Tc).get_trifinder()
+        owner = np.asarray(finder(pts[:, 0], pts[:, 1]), dtype=np.int64)
+    except (RuntimeError, ValueError):  # a layout matplotlib finds degenerate: search all
+        owner = np.full(len(pts), -1, np.int64)
+
+    def bary(t, x):
+        A, B, C = Q[Tc[t, 0]], Q[Tc[t, 1]], Q[Tc[t, 2]]
+        u1, u2, w = B - A, C - A, x - A
+        det = u1[..., 0] * u2[..., 1] - u1[..., 1] * u2[..., 0]
+        det = np.where(det != 0, det, 1.0)
+        b1 = (w[..., 0] * u2[..., 1] - w[..., 1] * u2[..., 0]) / det
+        b2 = (u1[..., 0] * w[..., 1] - u1[..., 1] * w[..., 0]) / det
+        return np.stack([1.0 - b1 - b2, b1, b2], axis=-1)
+
+    miss = np.flatnonzero(owner < 0)  # e.g. points on the border (round-off): best triangle
+    if len(miss):
+        allt = np.arange(len(Tc))
+        for s in range(0, len(miss), 512):
+            mm = miss[s:s + 512]
+            bc = bary(allt[None, :], pts[mm][:, None, :])
+            owner[mm] = np.argmax(bc.min(axis=2), axis=1)
+    bc = np.clip(bary(owner, pts), 0.0, None)
+    return owner, bc / bc.sum(axis=1, keepdims=True)
+
+
+def _refine_on_triangulation(k: int, S: np.ndarray, Ts: np.ndarray, Qs: np.ndarray, h: float, *,
+                             isometric: bool, creases: np.ndarray | None = None
+                             ) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
+    """Remesh the triangulated surface ``(S, Ts)`` spanning a loop to edge length ``h``.
+
+    ``S (n, 3)`` starts with the ``k`` loop vertices; ``Qs (n, 2)`` is a valid planar layout of
+    ``Ts`` (every triangle positive, none overlapping) whose first ``k`` rows are a simple
+    polygon containing the rest of the layout. Triangle meshes that polygon (no Steiner point on
+    the loop, minimum angle :data:`MIN_ANGLE`) and every new vertex is mapped to 3-D by the affine
+    map of the triangle of ``Ts`` containing it, so it lies on the surface. ``creases (q, 2)``
+    (pairs of loop vertices: edges of ``Ts`` where it folds) are kept as constraints (Triangle
+    may split them), so no new edge cuts across a fold and the new triangles lie on the surface
+    too; other edges of ``Ts`` are not, because fans of chords meeting at small angles at a loop
+    vertex force tiny triangles there. For an ``isometric`` layout the 3-D edge length is the
+    2-D one; otherwise the area bounds are corrected by the 2-D/3-D area ratio of each new
+    triangle with two rounds of Triangle's refinement (``r``).
+
+    Returns
+    -------
+    (X (m, 3), T (t, 3), X2 (m, 2)), or None if Triangle changed the loop vertices.
+    """
+    import triangle
+
+    Q = Qs[:k]
+    segs = np.c_[np.arange(k), (np.arange(k) + 1) % k]
+    if creases is not None and len(creases):
+        segs = np.r_[segs, np.asarray(creases, dtype=np.int64).reshape(-1, 2)]
+    target = _max_area_for(h)
+
+    def lift(X2):
+        X = np.empty((len(X2), 3))
+        X[:k] = S[:k]
+        if len(X2) > k:
+            owner, bc = _locate(Qs, Ts, X2[k:])
+            X[k:] = np.einsum("ij,ijk->ik", bc, S[Ts[owner]])
+        return X
+
+    def areas(X, T):
+        if X.shape[1] == 2:
+            d1, d2 = X[T[:, 1]] - X[T[:, 0]], X[T[:, 2]] - X[T[:, 0]]
+            return 0.5 * np.abs(d1[:, 0] * d2[:, 1] - d1[:, 1] * d2[:, 0])
+        return 0.5 * np.linalg.norm(np.cross(X[T[:, 1]] - X[T[:, 0]], X[T[:, 2]] - X[T[:, 0]]),
+                                    axis=1)
+
+    amax = target
+    if not isometric:
+        amax *= float(areas(Qs, Ts).sum()) / max(float(areas(S, Ts).sum()), 1e-300)
+    opts = f"pYQq{MIN_ANGLE:g}"
+    out = triangle.triangulate({"vertices": Q, "segments": segs}, opts + _area_switch(amax))
+    for _ in range(0 if isometric else 2):
+        X2 = np.asarray(out["vertices"], dtype=np.float64)
+        T = np.asarray(out["triangles"], dtype=np.int64)
+        a2, a3 = areas(X2, T), areas(lift(X2), T)
+        if (a3 <= 1.25 * target).all():
+            break
+        bound = np.where(a3 > 1.25 * target, a2 * target / np.maximum(a3, 1e-300), -1.0)
+        out = triangle.triangulate({"vertices": X2, "segments": out["segments"], "triangles": T,
+                                    "triangle_max_area": bound}, f"r{opts}a")
+    X2 = np.asarray(out["vertices"], dtype=np.float64)
+    T = np.asarray(out.get("triangles", np.empty((0, 3))), dtype=np.int64).reshape(-1, 3)
+    if len(T) == 0 or len(X2) < k or not np.allclose(X2[:k], Q):
+        return None
+    return lift(X2), T, X2
+
+
+def _subdivide(X: np.ndarray, T: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """1-to-4 midpoint subdivision (old vertices keep their indices, midpoints appended)."""
+    e = np.sort(np.r_[T[:, [0, 1]], T[:, [1, 2]], T[:, [2, 0]]], axis=1)
+    uniq, inv = np.unique(e, axis=0, return_inverse=True)
+    mid = len(X) + inv.reshape(3, -1).T  # (t, 3): midpoints of edges 01, 12, 20
+    Xn = np.r_[X, 0.5 * (X[uniq[:, 0]] + X[uniq[:, 1]])]
+    a, b, c = T[:, 0], T[:, 1], T[:, 2]
+    ab, bc, ca = mid[:, 0], mid[:, 1], mid[:, 2]
+    Tn = np.r_[np.c_[a, ab, ca], np.c_[ab, b, bc], np.c_[ca, bc, c], np.c_[ab, bc, ca]]
+    return Xn, Tn
+
+
+def _mean_value_layout(S: np.ndarray, T: np.ndarray, k: int) -> np.ndarray:
+    """Floater's mean-value embedding ``(n, 2)`` of the disc ``(S, T)``, boundary on the unit
+    circle by arc length (loop vertex 0 at angle 0; the ``k`` loop vertices first in ``S``).
+    Positive weights and a convex boundary make it a valid (fold-free) layout."""
+    from scipy.sparse.linalg import spsolve
+
+    from .topology import boundary_loops
+
+    n = len(S)
+    bl = boundary_loops(T, n)
+    b = max(bl, key=len)
+    b = np.roll(b, -int(np.flatnonzero(b == 0)[0]))
+    el = np.linalg.norm(S[b] - S[np.roll(b, -1)], axis=1)
+    t = np.r_[0.0, np.cumsum(el)[:-1]] / el.sum()
+    known = np.zeros(n, bool)
+    known[b] = True
+    U = np.zeros((n, 2))
+    U[b] = np.c_[np.cos(2 * np.pi * t), -np.sin(2 * np.pi * t)]
+    ang = _tri_angles(S, T)
+    rows, cols, vals = [], [], []
+    for c in range(3):
+        i, j, m = T[:, c], T[:, (c + 1) % 3], T[:, (c + 2) % 3]
+        tn = np.tan(0.5 * ang[:, c])
+        for o in (j, m):
+            rows.append(i)
+            cols.append(o)
+            vals.append(tn / np.maximum(np.linalg.norm(S[o] - S[i], axis=1), 1e-300))
+    W = sp.csr_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
+                      shape=(n, n))
+    L = (sp.diags(np.asarray(W.sum(axis=1)).ravel()) - W).tocsr()
+    unk = np.flatnonzero(~known)
+    if len(unk):
+        A = L[unk][:, unk].tocsc()
+        rhs = -(L[unk][:, np.flatnonzero(known)] @ U[known])
+        U[unk] = np.asarray(spsolve(A, rhs)).reshape(len(unk), 2)
+    return U
+
+
+LIEPA_CREASE = 20.0
+"""Chords of the minimum-weight triangulation folding by more than this (degrees) stay edges of
+the refined patch (:func:`_refine_on_triangulation`). 30° or less was needed for the unfaired
+patch of one hole of the fandisk 3-disc cut not to cut into the surface (45° was not enough);
+the price is a few short edges (1-5 % below 0.1 of the target) where folds fan out of a loop
+vertex."""
+
+
+def _creases(P: np.ndarray, T: np.ndarray, min_deg: float) -> np.ndarray:
+    """Interior edges ``(q, 2)`` of the triangulated polygon with a dihedral angle > min_deg."""
+    k = len(P)
+    n = np.cross(P[T[:, 1]] - P[T[:, 0]], P[T[:, 2]] - P[T[:, 0]])
+    n /= np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-300)
+    e = np.r_[T[:, [0, 1]], T[:, [1, 2]], T[:, [2, 0]]]
+    f = np.tile(np.arange(len(T)), 3)
+    key = np.sort(e, axis=1)
+    code = key[:, 0] * k + key[:, 1]
+    order = np.argsort(code, kind="stable")
+    cs = code[order]
+    same = np.flatnonzero(cs[1:] == cs[:-1])
+    a, b = f[order[same]], f[order[same + 1]]
+    cosang = np.einsum("ij,ij->i", n[a], n[b])
+    keep = cosang < np.cos(np.radians(min_deg))
+    return key[order[same]][keep]
+
+
+def _enclose_liepa(P: np.ndarray, h: float, opposite: np.ndarray | None,
+                   forbidden: np.ndarray | None) -> Patch:
+    """Liepa's triangulation of the loop, remeshed to edge length ``h`` on its own surface.
+
+    1. :func:`min_weight_triangulation` (no interior vertices).
+    2. A planar layout of it: the isometric development along its dual tree (:func:`_unfold`)
+       when that does not overlap itself (no distortion at all); otherwise the coarse surface is
+       subdivided 1-to-4 until its edges are at most ``2 h`` and laid out by Floater's
+       mean-value embedding with the loop on the unit circle by arc length (a convex boundary:
+       always valid, but anisotropic where the surface is far from developable).
+    3. :func:`_refine_on_triangulation`: Triangle meshes the layout to the target size, keeping
+       the folds of the coarse surface (:data:`LIEPA_CREASE`) as edges in the developed layout,
+       and every new vertex is placed on the coarse surface by the affine map of the triangle it
+       falls in; with the developed layout the patch lies on the coarse surface up to the
+       smaller folds, with the mean-value layout its vertices do.
+    """
+    k = len(P)
+    Tc = min_weight_triangulation(P, opposite=opposite, forbidden=forbidden)
+    Tc = _orient_patch(Tc, k)  # already backwards along the loop; checks it
+    Q = _unfold(P, Tc)
+    res = None
+    layout = "developed"
+    if Q is not None:
+        res = _refine_on_triangulation(k, P, Tc, Q, h, isometric=True,
+                                       creases=_creases(P, Tc, LIEPA_CREASE))
+    if res is None:
+        S, Ts = P, Tc
+        for _ in range(6):
+            e = np.r_[Ts[:, [0, 1]], Ts[:, [1, 2]], Ts[:, [2, 0]]]
+            if np.linalg.norm(S[e[:, 0]] - S[e[:, 1]], axis=1).max() <= 2.0 * h:
+                break
+            S, Ts = _subdivide(S, Ts)
+        res = _refine_on_triangulation(k, S, Ts, _mean_value_layout(S, Ts, k), h,
+                                       isometric=False)
+        layout = "mean-value"
+    if res is None:
+        raise MeshRepairError("the minimum-weight triangulation of the loop could not be remeshed "
+                              "(Triangle changed the loop vertices)")
+    X, T, X2 = res
+    log.debug("liepa: %d-loop, %d coarse triangles, %s layout, %d triangles", k, len(Tc),
+              layout, len(T))
+    return Patch(X=X, T=_orient_patch(T, k), uv=X2, method="liepa", n_loop=k)
+
+
+# ------------------------------------------------------------------------------------------------
 # enclosing several holes of a mesh
 # ------------------------------------------------------------------------------------------------
 
@@ -666,6 +1287,37 @@ def _nested_in(V: np.ndarray, F: np.ndarray, outer: Hole, inner: Hole) -> bool:
     return area_i > 0
 
 
+def _opposite_points(V: np.ndarray, F: np.ndarray, loop: np.ndarray) -> np.ndarray:
+    """Third vertex of the face on each loop edge ``(loop[i], loop[i+1])``, ``(k, 3)`` (NaN rows
+    where the edge has no face traversing it in that direction)."""
+    n = np.int64(max(int(F.max(initial=0)), int(loop.max())) + 1)
+    he = np.stack([F, np.roll(F, -1, axis=1)], axis=2).reshape(-1, 2)
+    third = np.roll(F, -2, axis=1).ravel()
+    code = he[:, 0] * n + he[:, 1]
+    order = np.argsort(code, kind="stable")
+    code = code[order]
+    want = loop * n + np.roll(loop, -1)
+    pos = np.clip(np.searchsorted(code, want), 0, max(len(code) - 1, 0))
+    out = np.full((len(loop), 3), np.nan)
+    if len(code):
+        hit = code[pos] == want
+        out[hit] = V[third[order[pos[hit]]]]
+    return out
+
+
+def _loop_chords(F: np.ndarray, loop: np.ndarray) -> np.ndarray:
+    """Edges of ``F`` joining two non-consecutive loop vertices, as local pairs ``(q, 2)``."""
+    k = len(loop)
+    n = max(int(F.max(initial=0)), int(loop.max())) + 1
+    local = np.full(n, -1, np.int64)
+    local[loop] = np.arange(k)
+    Fs = F[(local[F] >= 0).sum(axis=1) >= 2]
+    e = local[np.r_[Fs[:, [0, 1]], Fs[:, [1, 2]], Fs[:, [2, 0]]]]
+    e = np.sort(e[(e >= 0).all(axis=1)], axis=1)
+    d = e[:, 1] - e[:, 0]
+    return np.unique(e[(d >= 2) & (d != k - 1)], axis=0)
+
+
 def _existing_edge_codes(F: np.ndarray, n: int) -> np.ndarray:
     e = np.sort(np.concatenate([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]]), axis=1)
     return np.unique(e[:, 0] * np.int64(n) + e[:, 1])
@@ -673,7 +1325,8 @@ def _existing_edge_codes(F: np.ndarray, n: int) -> np.ndarray:
 
 def enclose_holes(V: np.ndarray, F: np.ndarray, holes: Sequence[Hole],
                   skip: dict[int, str] | None = None, *, edge_length: float | None = None,
-                  check: bool = True, intersections: bool = True
+                  check: bool = True, intersections: bool = True,
+                  method: str | Mapping[int, str] = "auto"
                   ) -> tuple[np.ndarray, np.ndarray, list[HoleReport]]:
     """Enclose the selected holes of a mesh with initial (membrane) patches.
 
@@ -691,6 +1344,10 @@ def enclose_holes(V: np.ndarray, F: np.ndarray, holes: Sequence[Hole],
         an open surface filled a second time).
     intersections : bool
         Also refuse a patch whose membrane position intersects the mesh (with ``check``).
+    method : str or mapping of int to str
+        How each loop is triangulated (:func:`enclose_loop`: ``"auto"`` or ``"liepa"``), for all
+        holes or per hole index (missing indices: ``"auto"``). Islands are always filled as
+        planar annuli.
 
     Returns
     -------
@@ -704,6 +1361,11 @@ def enclose_holes(V: np.ndarray, F: np.ndarray, holes: Sequence[Hole],
     F = np.asarray(F, dtype=np.int64)
     nV = len(V)
     skip = dict(skip or {})
+    methods = {h.index: method if isinstance(method, str) else method.get(h.index, "auto")
+               for h in holes}
+    bad = sorted(set(methods.values()) - set(ENCLOSE_METHODS))
+    if bad:
+        raise MeshRepairError(f"method must be one of {ENCLOSE_METHODS}, got {bad[0]!r}")
     reports: dict[int, HoleReport] = {}
     by_index = {h.index: h for h in holes}
 
@@ -763,6 +1425,11 @@ def enclose_holes(V: np.ndarray, F: np.ndarray, holes: Sequence[Hole],
                         status="skipped", reason=f"island inside hole {h.index} (see there)",
                         loop=isl.vertices.copy())
                     continue
+            elif methods[h.index] == "liepa":
+                gverts = h.vertices
+                patch = enclose_loop(V[h.vertices], edge_length=h_len, method="liepa",
+                                     opposite=_opposite_points(V, F, h.vertices),
+                                     forbidden=_loop_chords(Fcur, h.vertices))
             else:
                 gverts = h.vertices
                 patch = enclose_loop(V[h.vertices], edge_length=h_len)
