@@ -292,7 +292,8 @@ class PhaseTimer:
             return (getattr(o, "__module__", "") or "").startswith("meshrepair")
 
         for name, obj in list(vars(solver).items()):
-            if inspect.isfunction(obj) and ours(obj) and name != "_drop_short_chains":
+            if (inspect.isfunction(obj) and ours(obj) and name != "_drop_short_chains"
+                    and name != "heap_allocations"):
                 self._wrap(solver, name, name)
             elif inspect.ismodule(obj) and obj.__name__.startswith("meshrepair."):
                 for fn, f in list(vars(obj).items()):
@@ -303,6 +304,7 @@ class PhaseTimer:
                 for mn, m in list(vars(obj).items()):
                     if (inspect.isfunction(m) and not mn.startswith("__")
                             and (obj.__name__, mn) not in {("ADMMSolver", "solve"),
+                                                           ("ADMMSolver", "_solve"),
                                                            ("ADMMSolver", "with_options")}):
                         self._wrap(obj, mn, f"{obj.__name__}.{mn}")
         orig_solve = solver.ADMMSolver.solve

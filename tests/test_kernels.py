@@ -144,3 +144,18 @@ def test_face_neighbour_table_kernel_agrees(mesh):
     for x, y in zip(K._nb_face_neighbour_table(fa, fb, len(F)),
                     K._np_face_neighbour_table(fa, fb, len(F)), strict=True):
         assert np.array_equal(x, y)
+
+
+def test_creased_edges_match_dihedral_threshold(mesh):
+    from meshrepair.geometry import dihedral_angles, face_normals
+
+    V, F = mesh
+    topo = edge_topology(F, len(V))
+    N = face_normals(V, F)
+    fa, fb = (np.ascontiguousarray(c) for c in topo.edge_faces[topo.interior].T)
+    ang = dihedral_angles(N, topo)[topo.interior]
+    for th in (5.0, 10.0, 20.0):
+        want = ang > th
+        assert want.any() and not want.all()
+        assert np.array_equal(K.creased(N, fa, fb, th), want)
+        assert np.array_equal(K._nb_creased(N, fa, fb, np.cos(np.radians(th))), want)

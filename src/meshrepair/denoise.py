@@ -203,7 +203,7 @@ def denoise(
     from .io import as_arrays
 
     V, F = as_arrays(V, F)
-    with heap_allocations(len(V) >= REORDER_MIN_VERTICES):
+    with heap_allocations():
         return _denoise(V, F, lam=lam, th=th, a=a, robust_iters=robust_iters,
                         feature_iters=feature_iters, mask_update_every=mask_update_every,
                         min_feature_edges=min_feature_edges, tol=tol, unfold=unfold,

@@ -49,10 +49,8 @@ class NormalSystem:
         """Jacobi-PCG on ``(DᵀD + c I) X = B`` from ``X0``; fused kernel when numba is present."""
         if not _k.HAVE_NUMBA:
             return block_pcg(self.matrix(w, c), B, X0, rtol=rtol, maxiter=maxiter)
-        nF = self.nF
-        diag = np.bincount(self.fa, w, nF) + np.bincount(self.fb, w, nF) + c
         X = np.array(X0, dtype=np.float64, copy=True, order="C")
-        it = _k._nb_pcg(self.nb, self.fe, np.ascontiguousarray(w), diag,
+        it = _k._nb_pcg(self.nb, self.fe, np.ascontiguousarray(w, dtype=np.float64), float(c),
                         np.ascontiguousarray(B), X, rtol, maxiter)
         return X, int(it)
 

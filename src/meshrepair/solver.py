@@ -29,7 +29,6 @@ import numpy as np
 
 from . import _kernels as _k
 from ._memory import heap_allocations
-from .geometry import sharp_edge_mask
 from .inner import INNER_SOLVERS, InnerState, VSubproblem, run_inner
 from .linear import N_SOLVERS, NormalSystem, solve_normals
 from .penalties import mc_penalty, t_update
@@ -39,7 +38,6 @@ from .topology import Topology, edge_topology
 log = logging.getLogger(__name__)
 
 MASK_MODES = ("all", "adaptive", "none", "given")
-HEAP_MIN_VERTICES = 200_000  # see meshrepair._memory: larger arrays exceed glibc's mmap threshold
 
 
 @dataclass(frozen=True)
@@ -169,17 +167,12 @@ class SolverResult:
 
 def _drop_short_chains(mask: np.ndarray, topo: Topology, min_edges: int) -> np.ndarray:
     """Unset the edges of ``mask`` whose connected sharp-edge component has < ``min_edges``."""
-    import scipy.sparse as sp
-    from scipy.sparse.csgraph import connected_components
-
     idx = np.flatnonzero(mask)
     if len(idx) == 0:
         return mask
     e = topo.edges[idx]
-    nV = topo.n_vertices
-    A = sp.coo_matrix((np.ones(len(e)), (e[:, 0], e[:, 1])), shape=(nV, nV))
-    n, lab = connected_components(A, directed=False)
-    cnt = np.bincount(lab[e[:, 0]], minlength=n)
+    lab = _k.union_find(topo.n_vertices, e[:, 0], e[:, 1])
+    cnt = np.bincount(lab[e[:, 0]], minlength=int(lab.max()) + 1)
     out = mask.copy()
     out[idx[cnt[lab[e[:, 0]]] < min_edges]] = False
     return out
@@ -242,8 +235,9 @@ class ADMMSolver:
             m = np.zeros(nE, bool)
         elif mode == "given":
             m = np.zeros(nE, bool) if given is None else np.asarray(given, bool).copy()
-        else:
-            m = sharp_edge_mask(normals, self.topo, self.options.th).astype(bool)
+        else:  # the dihedral threshold (5) on interior edges
+            m = np.zeros(nE, bool)
+            m[self.ie] = _k.creased(normals, self.fa, self.fb, self.options.th)
             if self.options.min_feature_edges > 1:
                 m = _drop_short_chains(m, self.topo, self.options.min_feature_edges)
         m[self.edge_force == 0] = False
@@ -279,7 +273,7 @@ class ADMMSolver:
         -------
         SolverResult
         """
-        with heap_allocations(self.topo.n_vertices >= HEAP_MIN_VERTICES):
+        with heap_allocations():
             return self._solve(V0, V_init, given_mask=given_mask, callback=callback)
 
     def _solve(self, V0: np.ndarray, V_init: np.ndarray | None, *,
