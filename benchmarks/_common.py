@@ -132,7 +132,26 @@ def machine_info() -> dict:
         info["loadavg"] = tuple(round(x, 2) for x in os.getloadavg())
     except OSError:
         pass
+    info["memprobe_ms"] = memory_probe()
     return info
+
+
+def memory_probe(n: int = 7_000_000, repeats: int = 5) -> float:
+    """Milliseconds for one random gather-and-sum over ``n`` float64 (56 MB), minimum of
+    ``repeats``: the memory-bound kind of work an ADMM iteration at a million vertices is made of.
+    This shared VM's speed for such work varies up to 2x from one hour to the next (measured:
+    the same 1.18M-vertex run took 57 s and 94 s within 15 minutes), so every table records the
+    probe taken just before it; compare timings only between runs with similar probes."""
+    rng = np.random.default_rng(0)
+    x = rng.random(n)
+    idx = np.sort(rng.integers(0, n, n)) ^ (np.arange(n) & 255)  # local but not sequential
+    idx = np.clip(idx, 0, n - 1)
+    best = np.inf
+    for _ in range(repeats):
+        t = time.perf_counter()
+        float(x[idx].sum())
+        best = min(best, time.perf_counter() - t)
+    return round(best * 1000, 1)
 
 
 def warm_imports(jit: bool = True) -> float:
