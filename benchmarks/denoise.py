@@ -36,8 +36,10 @@ times and the *minimum* is reported (the machine may be shared). Columns:
   (numpy registers its buffers with tracemalloc, so this is numpy arrays + Python objects
   allocated during the call, excluding the input); for scaling rows ≥ 200k vertices this run is
   shortened to 2 + 4 iterations (the per-iteration working set repeats);
-* ``RSS Δ MB``: ``ru_maxrss`` after the first timed call − RSS just before it (same process,
-  input already loaded): the real resident peak the call added, including allocator slack;
+* ``RSS Δ MB``: resident high-water mark of the first timed call (VmHWM, reset just before it
+  through ``/proc/self/clear_refs``; ``ru_maxrss`` where that is unavailable) − RSS just before
+  it (same process, input already loaded): the real resident peak the call added, including
+  allocator slack;
 * ``MSAE``: mean squared angular error of face normals (deg², (33)) noisy → result;
   ``E_V``: (34) noisy → result.
 """
