@@ -675,13 +675,15 @@ if HAVE_NUMBA:
     @njit(cache=True)
     def _nb_edges_from_groups(F, order):  # pragma: no cover - compiled
         nH = order.shape[0]
+        new = np.empty(nH, np.bool_)  # position i of the grouping starts a new edge
         n_e = 0
         plo, phi = -1, -1
         for i in range(nH):
             h = order[i]
             u, v = F[h // 3, h % 3], F[h // 3, (h % 3 + 1) % 3]
             lo, hi = min(u, v), max(u, v)
-            if lo != plo or hi != phi:
+            new[i] = lo != plo or hi != phi
+            if new[i]:
                 n_e += 1
                 plo, phi = lo, hi
         edges = np.empty((n_e, 2), np.int64)
@@ -689,15 +691,12 @@ if HAVE_NUMBA:
         counts = np.zeros(n_e, np.int64)
         inv = np.empty(nH, np.int64)
         e = -1
-        plo, phi = -1, -1
         for i in range(nH):
             h = order[i]
-            u, v = F[h // 3, h % 3], F[h // 3, (h % 3 + 1) % 3]
-            lo, hi = min(u, v), max(u, v)
-            if lo != plo or hi != phi:
+            if new[i]:
                 e += 1
-                plo, phi = lo, hi
-                edges[e, 0], edges[e, 1] = lo, hi
+                u, v = F[h // 3, h % 3], F[h // 3, (h % 3 + 1) % 3]
+                edges[e, 0], edges[e, 1] = min(u, v), max(u, v)
                 edge_he[e, 0] = h
             elif counts[e] == 1:
                 edge_he[e, 1] = h

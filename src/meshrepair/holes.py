@@ -480,6 +480,17 @@ def _orient_patch(T: np.ndarray, k: int) -> np.ndarray:
     return T
 
 
+def _loop_positions(P) -> np.ndarray:
+    """``P`` as a C-contiguous ``(k, 3)`` float64 array of finite loop positions, ``k >= 3``."""
+    P = np.ascontiguousarray(P, dtype=np.float64)
+    if P.ndim != 2 or P.shape[1] != 3 or len(P) < 3:
+        raise MeshRepairError(f"a hole loop needs at least 3 vertices of shape (k, 3), got "
+                              f"{P.shape}")
+    if not np.isfinite(P).all():
+        raise MeshRepairError("the hole loop has non-finite vertex positions")
+    return P
+
+
 def enclose_loop(P: np.ndarray, *, edge_length: float | None = None, method: str = "auto",
                  opposite: np.ndarray | None = None,
                  forbidden: np.ndarray | None = None) -> Patch:
@@ -519,12 +530,7 @@ def enclose_loop(P: np.ndarray, *, edge_length: float | None = None, method: str
     """
     if method not in ENCLOSE_METHODS:
         raise MeshRepairError(f"method must be one of {ENCLOSE_METHODS}, got {method!r}")
-    P = np.asarray(P, dtype=np.float64)
-    if P.ndim != 2 or P.shape[1] != 3 or len(P) < 3:
-        raise MeshRepairError(f"a hole loop needs at least 3 vertices of shape (k, 3), got "
-                              f"{P.shape}")
-    if not np.isfinite(P).all():
-        raise MeshRepairError("the hole loop has non-finite vertex positions")
+    P = _loop_positions(P)
     k = len(P)
     el = np.linalg.norm(P - np.roll(P, -1, axis=0), axis=1)
     if (el <= 0).any():
@@ -881,12 +887,7 @@ def min_weight_triangulation(P: np.ndarray, *, opposite: np.ndarray | None = Non
     MeshRepairError
         For a loop of fewer than 3 vertices or non-finite positions.
     """
-    P = np.ascontiguousarray(P, dtype=np.float64)
-    if P.ndim != 2 or P.shape[1] != 3 or len(P) < 3:
-        raise MeshRepairError(f"a hole loop needs at least 3 vertices of shape (k, 3), got "
-                              f"{P.shape}")
-    if not np.isfinite(P).all():
-        raise MeshRepairError("the hole loop has non-finite vertex positions")
+    P = _loop_positions(P)
     k = len(P)
     N0, has0 = _edge_normals(P, opposite)
     forbid = np.zeros((k, k), bool)
