@@ -23,6 +23,17 @@ def shared_mesh(name: str):
 
 
 @pytest.fixture
+def require_shared():
+    """Fail (never skip) when the shared meshes are missing: tests that need them must run."""
+    if not (SHARED / "MANIFEST.md").exists():
+        pytest.fail(f"shared meshes missing in {SHARED}: set MESHREPAIR_SHARED_MESHES to the "
+                    "folder")
+
+
+needs_meshes = pytest.mark.usefixtures("require_shared")
+
+
+@pytest.fixture
 def rng():
     return np.random.default_rng(12345)
 

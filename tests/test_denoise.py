@@ -162,6 +162,29 @@ def test_open_mesh_keeps_boundary_sensible():
     assert msae(r.V, V, F) < msae(Vn, V, F) / 3
 
 
+def test_real_scan_rabbit_defaults():
+    """The shared real scan (no ground truth, real noise, a 1104-edge opening): the defaults
+    lower the estimated noise at least 3x without folding faces, shrinking the shape or moving
+    the open border. Measured: noise 0.095 -> 0.019 edge lengths, mean move 0.09 edge, bbox
+    within 0.4 %."""
+    from meshrepair.relax import locally_flipped_faces
+    from meshrepair.topology import boundary_loops
+
+    V, F = shared_mesh("scans/rabbit_scan.ply")
+    r = denoise(V, F)
+    topo = edge_topology(F, len(V))
+    h = mean_edge_length(V, F)
+    g_in, g_out = estimate_noise(V, F), estimate_noise(r.V, F)
+    assert g_out < g_in / 3, (g_in, g_out)
+    assert locally_flipped_faces(r.V, topo).sum() == 0
+    move = np.linalg.norm(r.V - V, axis=1)
+    assert move.mean() < 0.2 * h, move.mean() / h
+    assert np.allclose(np.ptp(r.V, axis=0), np.ptp(V, axis=0), rtol=0.01)
+    border = boundary_loops(F)[0]
+    assert len(border) == 1104
+    assert move[border].mean() < 0.5 * h
+
+
 @pytest.mark.parametrize(
     "V,F,match",
     [

@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import argparse
 import logging
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -25,11 +24,9 @@ from meshrepair.metrics import distances
 from meshrepair.topology import boundary_loops, edge_topology
 from meshrepair.validate import check_mesh
 
-from .conftest import grid
+from .conftest import SHARED, grid, needs_meshes, shared_mesh
 
-MESHES = Path("/work/shared/meshes")
-needs_meshes = pytest.mark.skipif(not (MESHES / "spot.ply").exists(),
-                                  reason="shared meshes not available")
+MESHES = SHARED
 
 
 # ------------------------------------------------------------------------------------------------
@@ -607,3 +604,22 @@ def test_cli_fill_and_inpaint(tmp_path, capsys):
     assert "needs 4 comma-separated numbers" in capsys.readouterr().out
     assert _cli(["inpaint", str(src), str(tmp_path / "x.ply"), "--sphere", "99,9,9,1"]) == 2
     assert "contains no vertex" in capsys.readouterr().out
+
+
+@needs_meshes
+def test_real_scan_rabbit_small_hole_filled_opening_kept_or_refused():
+    """rabbit_scan has a 1104-edge opening (the scan's open bottom) and a 5-edge hole. With
+    keep_border the small hole is closed and the opening kept; without, the opening is refused
+    with a message pointing to keep_border (a planar fill would cut through the scan), and the
+    rest is still filled."""
+    from meshrepair.topology import boundary_loops
+
+    V, F = shared_mesh("scans/rabbit_scan.ply")
+    kept = fill_holes(V, F, keep_border=True)
+    assert [h.status for h in kept.holes] == ["skipped", "filled"]
+    assert len(boundary_loops(kept.F)) == 1 and len(boundary_loops(kept.F)[0]) == 1104
+    check_mesh(kept.V, kept.F)
+    full = fill_holes(V, F)
+    assert [h.status for h in full.holes] == ["skipped", "filled"]
+    assert "keep_border" in full.holes[0].reason
+    assert np.array_equal(full.F, kept.F)

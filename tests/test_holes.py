@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-from pathlib import Path
-
 import numpy as np
 import pytest
 
@@ -21,11 +19,9 @@ from meshrepair.holes import (
 from meshrepair.topology import boundary_loops, edge_topology
 from meshrepair.validate import check_mesh
 
-from .conftest import grid
+from .conftest import SHARED, grid, needs_meshes
 
-MESHES = Path("/work/shared/meshes")
-needs_meshes = pytest.mark.skipif(not (MESHES / "bunny.ply").exists(),
-                                  reason="shared meshes not available")
+MESHES = SHARED
 
 
 # ------------------------------------------------------------------------------------------------
@@ -598,3 +594,23 @@ def test_self_intersections_clean_mesh_has_none():
     c = V.mean(axis=0)
     V[0] = c - 1.5 * (V[0] - c)
     assert len(self_intersections(V, m.F)) > 0
+
+
+def test_self_intersections_candidates_complete_with_mixed_face_sizes():
+    """The radius-class candidate search finds every pair a brute-force pairwise test finds, on a
+    soup of triangles whose sizes span 100x (a few huge faces among many small ones)."""
+    rng = np.random.default_rng(5)
+    n = 70
+    centers = rng.random((n, 3))
+    size = np.where(rng.random(n) < 0.1, 0.5, 0.005 * (1 + 4 * rng.random(n)))
+    V = (centers[:, None, :] + size[:, None, None] * rng.normal(size=(n, 3, 3))).reshape(-1, 3)
+    F = np.arange(3 * n).reshape(n, 3)
+    got = {tuple(p) for p in self_intersections(V, F).tolist()}
+    want = set()
+    for i in range(n):
+        for j in range(i + 1, n):
+            if len(self_intersections(V, F[[i, j]])):
+                want.add((i, j))
+    assert want and got == want
+    sub = {tuple(p) for p in self_intersections(V, F, faces=[0, 1, 2]).tolist()}
+    assert sub == {p for p in want if p[0] in (0, 1, 2) or p[1] in (0, 1, 2)}

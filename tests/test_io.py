@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import logging
-from pathlib import Path
 
 import numpy as np
 import plyfile
@@ -12,9 +11,10 @@ import pytest
 from meshrepair.errors import MeshRepairError
 from meshrepair.io import MeshData, as_arrays, read_mesh, read_vertex_mask, write_mesh
 
-MESHES = Path("/work/shared/meshes")
+from .conftest import SHARED, needs_meshes
+
+MESHES = SHARED
 FANDISK = MESHES / "fandisk.ply"
-needs_meshes = pytest.mark.skipif(not FANDISK.exists(), reason="shared meshes not available")
 
 
 def _mesh():

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import logging
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -11,9 +10,9 @@ import pytest
 from meshrepair.errors import MeshRepairError
 from meshrepair.validate import MeshReport, check_mesh
 
-MESHES = Path("/work/shared/meshes")
-needs_meshes = pytest.mark.skipif(not (MESHES / "fandisk.ply").exists(),
-                                  reason="shared meshes not available")
+from .conftest import SHARED, needs_meshes
+
+MESHES = SHARED
 
 
 def tetra():

@@ -43,6 +43,7 @@ to check patches.
 
 from __future__ import annotations
 
+import itertools
 import logging
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
@@ -1654,37 +1655,35 @@ def self_intersections(V: np.ndarray, F: np.ndarray, faces: np.ndarray | None = 
         return np.empty((0, 2), np.int64)
     cen = V[F].mean(axis=1)
     rad = np.linalg.norm(V[F] - cen[:, None, :], axis=2).max(axis=1)
-    # faces much larger than usual are paired by brute force, the rest through a k-d tree
-    big = rad > 4.0 * float(np.median(rad))
-    small = np.flatnonzero(~big)
-    qs = q_faces[~big[q_faces]]
+    # candidate pairs: centroids closer than the sum of the circumradii. Faces are put in classes
+    # of radius within a factor 2, one k-d tree per class, each queried with the query face's
+    # radius plus the class's largest: tight even when a few faces are much larger than the rest
+    # (a coarse patch over a big hole made the single-radius search generate 10^7 candidates)
+    med = max(float(np.median(rad)), 1e-300)
+    cls = np.floor(np.log2(np.maximum(rad, 1e-300) / med)).astype(np.int64)
+    cls = np.clip(cls, -8, None)
     a_parts, b_parts = [], []
-    if len(small) and len(qs):
-        tree = cKDTree(cen[small])
-        r_max = float(rad[small].max())
-        lists = tree.query_ball_point(cen[qs], r=rad[qs] + r_max)
-        a_parts.append(np.repeat(qs, [len(x) for x in lists]))
-        b_parts.append(small[np.fromiter((j for x in lists for j in x), dtype=np.int64,
-                                         count=int(sum(len(x) for x in lists)))])
-    qset = np.zeros(len(F), bool)
-    qset[q_faces] = True
-    for f in np.flatnonzero(big):
-        near = np.linalg.norm(cen - cen[f], axis=1) <= rad + rad[f]
-        if not qset[f]:
-            near &= qset
-        a_parts.append(np.full(int(near.sum()), f, np.int64))
-        b_parts.append(np.flatnonzero(near))
+    for c in np.unique(cls):
+        members = np.flatnonzero(cls == c)
+        tree = cKDTree(cen[members])
+        lists = tree.query_ball_point(cen[q_faces], r=rad[q_faces] + float(rad[members].max()))
+        counts = np.fromiter((len(x) for x in lists), dtype=np.int64, count=len(lists))
+        if counts.sum() == 0:
+            continue
+        a_parts.append(np.repeat(q_faces, counts))
+        b_parts.append(members[np.fromiter(itertools.chain.from_iterable(lists), dtype=np.int64,
+                                           count=int(counts.sum()))])
     if not a_parts:
         return np.empty((0, 2), np.int64)
     a = np.concatenate(a_parts)
     b = np.concatenate(b_parts)
-    keep = a != b
-    a, b = a[keep], b[keep]
-    lo, hi = np.minimum(a, b), np.maximum(a, b)
-    if len(lo) == 0:
+    # each (query face, face) pair is found once; a pair of two query faces twice: keep a < b
+    qset = np.zeros(len(F), bool)
+    qset[q_faces] = True
+    keep = (a != b) & (~qset[b] | (a < b))
+    a, b = np.minimum(a[keep], b[keep]), np.maximum(a[keep], b[keep])
+    if len(a) == 0:
         return np.empty((0, 2), np.int64)
-    code = np.unique(lo * np.int64(len(F)) + hi)
-    a, b = code // len(F), code % len(F)
     close = np.linalg.norm(cen[a] - cen[b], axis=1) <= rad[a] + rad[b]
     a, b = a[close], b[close]
     Fa, Fb = F[a], F[b]
@@ -1723,4 +1722,5 @@ def self_intersections(V: np.ndarray, F: np.ndarray, faces: np.ndarray | None = 
         cosang = np.einsum("ij,ij->i", na, nb) / np.maximum(
             np.linalg.norm(na, axis=1) * np.linalg.norm(nb, axis=1), 1e-300)
         hit[m2] = cosang < -np.cos(np.radians(0.1))
-    return np.c_[a[hit], b[hit]].astype(np.int64)
+    pairs = np.c_[a[hit], b[hit]].astype(np.int64)
+    return pairs[np.lexsort((pairs[:, 1], pairs[:, 0]))]
