@@ -45,7 +45,7 @@ def output_path(out: str | os.PathLike, inputs: list, *, force: bool = False,
 class ProgressBar:
     """A tqdm progress bar fed by the solver's per-iteration callback."""
 
-    def __init__(self, total: int, desc: str, enabled: bool = True):
+    def __init__(self, total: int | None, desc: str, enabled: bool = True):
         from tqdm import tqdm
 
         self.bar = tqdm(total=total, desc=desc, unit="it", disable=not enabled, leave=False)

@@ -90,9 +90,14 @@ def run_fill(args: argparse.Namespace) -> int:
             print(f"  hole {h.index}: {h.n_boundary} boundary edges, length {h.length:.6g}"
                   f"{', pinched' if h.pinched else ''}")
         return 0
-    res = fill_holes(m.V, m.F, max_hole_size=args.max_hole_size, keep_border=args.keep_border,
-                     exclude=args.exclude or (), holes=args.holes, denoise=args.denoise,
-                     initial=args.initial, refine=not args.no_refine)
+    bar = _bar(args, "fill")
+    try:
+        res = fill_holes(m.V, m.F, max_hole_size=args.max_hole_size,
+                         keep_border=args.keep_border, exclude=args.exclude or (),
+                         holes=args.holes, denoise=args.denoise, initial=args.initial,
+                         refine=not args.no_refine, callback=bar)
+    finally:
+        bar.close()
     print(res.summary())
     _write(out, res, args.log, {"input": args.input})
     print(f"wrote {out} ({len(res.V)} vertices, {len(res.F)} faces, {res.timings['total']:.2f} s)")
@@ -115,13 +120,24 @@ def run_inpaint(args: argparse.Namespace) -> int:
     else:
         x0, y0, z0, x1, y1, z1 = _floats(args.box, 6, "--box")
         region = ("box", (x0, y0, z0), (x1, y1, z1))
-    res = inpaint(m.V, m.F, region, denoise=args.denoise, initial=args.initial,
-                  refine=not args.no_refine)
+    bar = _bar(args, "inpaint")
+    try:
+        res = inpaint(m.V, m.F, region, denoise=args.denoise, initial=args.initial,
+                      refine=not args.no_refine, callback=bar)
+    finally:
+        bar.close()
     print(res.summary())
     _write(out, res, args.log, {"input": args.input})
     print(f"wrote {out} ({len(res.V)} vertices, {len(res.F)} faces, {res.timings['total']:.2f} s)")
     _report(args, res, m)
     return 0
+
+
+def _bar(args: argparse.Namespace, desc: str):
+    """Progress bar over the ADMM iterations of the repair solve (none with ``--quiet``)."""
+    from .common import ProgressBar
+
+    return ProgressBar(None, desc, enabled=not args.quiet)
 
 
 def _common(p: argparse.ArgumentParser) -> None:
@@ -133,6 +149,7 @@ def _common(p: argparse.ArgumentParser) -> None:
     p.add_argument("--no-refine", action="store_true",
                    help="skip the ADMM solve (keep the initial patch; ignored with --denoise)")
     p.add_argument("--force", action="store_true", help="overwrite OUT if it exists")
+    p.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
     from .common import add_report_option
 
     add_report_option(p)
