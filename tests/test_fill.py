@@ -595,7 +595,7 @@ def test_cli_fill_and_inpaint(tmp_path, capsys):
     out2 = tmp_path / "inp.ply"
     assert _cli(["inpaint", str(src), str(out2), "--sphere", "7,7,1.0,1.6"]) == 0
     assert "removed" in capsys.readouterr().out and out2.exists()
-    assert _cli(["inpaint", str(src), str(out2), "--box", "6,6,-1,8,8,3", "--force"]) == 0
+    assert _cli(["inpaint", str(src), str(out2), "--box", "6,6,-1,8,8,3", "--force", "-q"]) == 0
     idx = tmp_path / "region.txt"
     idx.write_text(" ".join(str(i) for i in np.flatnonzero(np.abs(V[:, 0] - 11) < 1.5)[:6]))
     assert _cli(["inpaint", str(src), str(out2), "--region", str(idx), "--force"]) == 0

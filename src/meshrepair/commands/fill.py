@@ -90,19 +90,10 @@ def run_fill(args: argparse.Namespace) -> int:
             print(f"  hole {h.index}: {h.n_boundary} boundary edges, length {h.length:.6g}"
                   f"{', pinched' if h.pinched else ''}")
         return 0
-    bar = _bar(args, "fill")
-    try:
-        res = fill_holes(m.V, m.F, max_hole_size=args.max_hole_size,
-                         keep_border=args.keep_border, exclude=args.exclude or (),
-                         holes=args.holes, denoise=args.denoise, initial=args.initial,
-                         refine=not args.no_refine, callback=bar)
-    finally:
-        bar.close()
-    print(res.summary())
-    _write(out, res, args.log, {"input": args.input})
-    print(f"wrote {out} ({len(res.V)} vertices, {len(res.F)} faces, {res.timings['total']:.2f} s)")
-    _report(args, res, m)
-    return 0
+    return _solve_and_write(args, m, out, "fill", lambda cb: fill_holes(
+        m.V, m.F, max_hole_size=args.max_hole_size, keep_border=args.keep_border,
+        exclude=args.exclude or (), holes=args.holes, denoise=args.denoise,
+        initial=args.initial, refine=not args.no_refine, callback=cb))
 
 
 def run_inpaint(args: argparse.Namespace) -> int:
@@ -120,10 +111,19 @@ def run_inpaint(args: argparse.Namespace) -> int:
     else:
         x0, y0, z0, x1, y1, z1 = _floats(args.box, 6, "--box")
         region = ("box", (x0, y0, z0), (x1, y1, z1))
-    bar = _bar(args, "inpaint")
+    return _solve_and_write(args, m, out, "inpaint", lambda cb: inpaint(
+        m.V, m.F, region, denoise=args.denoise, initial=args.initial,
+        refine=not args.no_refine, callback=cb))
+
+
+def _solve_and_write(args: argparse.Namespace, m, out: Path, desc: str, solve) -> int:
+    """Run ``solve(callback)`` under a progress bar (none with ``--quiet``), print the per-hole
+    summary, write OUT (and ``--log``/``--report``); returns the exit code."""
+    from .common import ProgressBar
+
+    bar = ProgressBar(None, desc, enabled=not args.quiet)
     try:
-        res = inpaint(m.V, m.F, region, denoise=args.denoise, initial=args.initial,
-                      refine=not args.no_refine, callback=bar)
+        res = solve(bar)
     finally:
         bar.close()
     print(res.summary())
@@ -131,13 +131,6 @@ def run_inpaint(args: argparse.Namespace) -> int:
     print(f"wrote {out} ({len(res.V)} vertices, {len(res.F)} faces, {res.timings['total']:.2f} s)")
     _report(args, res, m)
     return 0
-
-
-def _bar(args: argparse.Namespace, desc: str):
-    """Progress bar over the ADMM iterations of the repair solve (none with ``--quiet``)."""
-    from .common import ProgressBar
-
-    return ProgressBar(None, desc, enabled=not args.quiet)
 
 
 def _common(p: argparse.ArgumentParser) -> None:
