@@ -32,6 +32,34 @@ def require_shared():
 
 needs_meshes = pytest.mark.usefixtures("require_shared")
 
+# Markers that select tests needing more than a clone of the project:
+#   shared  - reads the real meshes in ../shared/meshes (turn on with --shared)
+#   browser - drives the system Chromium (turn on with --browser)
+# They are deselected by default (pytest reports them as deselected, never as passed); when
+# turned on and their data or browser is missing they fail, never skip.
+OPT_IN_MARKERS = {"shared": "--shared", "browser": "--browser"}
+
+
+def pytest_addoption(parser):
+    parser.addoption("--shared", action="store_true",
+                     help="also run the quality tests that read ../shared/meshes")
+    parser.addoption("--browser", action="store_true",
+                     help="also run the browser tests (system Chromium)")
+
+
+def pytest_collection_modifyitems(config, items):
+    keep, drop = [], []
+    for item in items:
+        # a test that needs the shared meshes is a shared test, marked or not
+        if "require_shared" in getattr(item, "fixturenames", ()):
+            item.add_marker(pytest.mark.shared)
+        off = [m for m, opt in OPT_IN_MARKERS.items()
+               if item.get_closest_marker(m) is not None and not config.getoption(opt)]
+        (drop if off else keep).append(item)
+    if drop:
+        config.hook.pytest_deselected(items=drop)
+        items[:] = keep
+
 
 @pytest.fixture
 def rng():
