@@ -1,0 +1,176 @@
+"""Planar enclosing of one loop (Sect. 5 of the paper, "trivial enclosing").
+
+The loop is projected onto the plane orthogonal to its vector area (else the least-squares plane,
+else the unit disc by arc length), meshed by Triangle (``pYq28a``: no Steiner point on the loop)
+and the interior vertices are placed on the harmonic membrane (cotangent weights of the 2-D
+triangulation). :func:`enclose_loop` dispatches to :mod:`.liepa` for ``method="liepa"``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..errors import MeshRepairError
+from ._geom2d import (
+    Patch,
+    _cotan_weights_2d,
+    _harmonic,
+    _loop_positions,
+    _max_area_for,
+    _orient_patch,
+    _plane_frame,
+    _polygon_is_simple,
+    _triangulate,
+    _vector_area,
+)
+
+ENCLOSE_METHODS = ("auto", "liepa")
+"""Ways :func:`enclose_loop` can triangulate a loop."""
+
+
+def enclose_loop(P: np.ndarray, *, edge_length: float | None = None, method: str = "auto",
+                 opposite: np.ndarray | None = None,
+                 forbidden: np.ndarray | None = None) -> Patch:
+    """Triangulate the hole bounded by the closed 3-D polygon ``P``.
+
+    Parameters
+    ----------
+    P : (k, 3) float array, k >= 3
+        Loop positions in the order of :attr:`Hole.vertices`.
+    edge_length : float, optional
+        Target interior edge length (default: the loop's mean edge length).
+    method : ``"auto"`` or ``"liepa"``
+        ``"auto"``: a planar view of the loop (vector-area plane, least-squares plane, else the
+        unit disc) meshed by Triangle, interior vertices on the harmonic membrane.
+        ``"liepa"``: :func:`min_weight_triangulation` of the loop (minimal largest dihedral
+        angle, then area, against the faces in ``opposite``), refined to the edge length on that
+        surface (see :func:`_enclose_liepa`); follows the surrounding faces where the loop is far
+        from planar.
+    opposite : (k, 3) float, optional
+        ``"liepa"`` only: third vertex of the existing face on each loop edge.
+    forbidden : (q, 2) int, optional
+        ``"liepa"`` only: local index pairs that are existing edges (not to be used as chords).
+
+    Returns
+    -------
+    Patch
+        The first ``k`` rows of ``Patch.X`` are ``P``; ``Patch.T`` traverses every loop edge
+        backwards, so the patch is consistently oriented with the faces that border the loop. The
+        interior vertices are the harmonic interpolation of ``P`` (a membrane) or lie on the
+        minimum-weight triangulation (``"liepa"``); use :func:`fair_vertices` for a curved fill.
+
+    Raises
+    ------
+    MeshRepairError
+        If the loop has fewer than 3 vertices, repeated or non-finite positions, or for an
+        unknown ``method``.
+    """
+    if method not in ENCLOSE_METHODS:
+        raise MeshRepairError(f"method must be one of {ENCLOSE_METHODS}, got {method!r}")
+    P = _loop_positions(P)
+    k = len(P)
+    el = np.linalg.norm(P - np.roll(P, -1, axis=0), axis=1)
+    if (el <= 0).any():
+        raise MeshRepairError("the hole loop has two consecutive vertices at the same position "
+                              "(zero-length boundary edge); merge or move them first")
+    Lp = float(el.sum())
+    h = float(el.mean()) if edge_length is None else float(edge_length)
+    if not h > 0:
+        raise MeshRepairError(f"edge_length must be > 0, got {edge_length}")
+    if k == 3:
+        return Patch(X=P.copy(), T=np.array([[0, 2, 1]], dtype=np.int64),
+                     uv=np.zeros((3, 2)), method="triangle", n_loop=3)
+    if method == "liepa":
+        from .liepa_refine import _enclose_liepa
+
+        return _enclose_liepa(P, h, opposite, forbidden)
+    segs = np.c_[np.arange(k), (np.arange(k) + 1) % k]
+    c = P.mean(axis=0)
+    candidates: list[tuple[str, np.ndarray]] = []
+    va = _vector_area(P)
+    if np.linalg.norm(va) > 1e-12 * Lp * Lp:
+        candidates.append(("plane", -va))
+    _, _, vt = np.linalg.svd(P - c, full_matrices=False)
+    n_pca = vt[2] if np.dot(vt[2], -va) >= 0 else -vt[2]
+    candidates.append(("pca-plane", n_pca))
+    for method, n in candidates:
+        e1, e2 = _plane_frame(n)
+        Q = np.c_[(P - c) @ e1, (P - c) @ e2]
+        if not _polygon_is_simple(Q):
+            continue
+        L2 = float(np.linalg.norm(Q - np.roll(Q, -1, axis=0), axis=1).sum())
+        h2 = h * L2 / Lp
+        X2, T = _triangulate(Q, segs, _max_area_for(h2))
+        if len(T) == 0 or len(X2) < k or not np.allclose(X2[:k], Q):
+            continue
+        if (np.abs(X2[k:, None, :] - Q[None]).sum(axis=2) == 0).any() if len(X2) > k else False:
+            continue
+        T = _orient_patch(T, k)
+        X = _embed(P, X2, T)
+        return Patch(X=X, T=T, uv=X2, method=method, n_loop=k)
+    # disc: cumulative arc length on the unit circle (always a convex, valid polygon)
+    s = np.r_[0.0, np.cumsum(el)[:-1]] / Lp
+    Q = np.c_[np.cos(2 * np.pi * s), np.sin(2 * np.pi * s)]
+    # number of triangles from the area of a coarse membrane over the loop
+    X2c, Tc = _triangulate(Q, segs, None)
+    Xc = _embed(P, X2c, Tc)
+    area3 = 0.5 * float(np.linalg.norm(np.cross(Xc[Tc[:, 1]] - Xc[Tc[:, 0]],
+                                                Xc[Tc[:, 2]] - Xc[Tc[:, 0]]), axis=1).sum())
+    n_tri = max(area3 / (np.sqrt(3.0) / 4.0 * h * h), 1.0)
+    X2, T = _triangulate(Q, segs, 2.0 * np.pi / n_tri)
+    T = _orient_patch(T, k)
+    X = _embed(P, X2, T)
+    return Patch(X=X, T=T, uv=X2, method="disc", n_loop=k)
+
+
+def _embed(P: np.ndarray, X2: np.ndarray, T: np.ndarray) -> np.ndarray:
+    """3-D positions of a 2-D triangulation whose first ``len(P)`` vertices are ``P``."""
+    n = len(X2)
+    known = np.zeros(n, bool)
+    known[: len(P)] = True
+    W = _cotan_weights_2d(X2, T, n)
+    # clamp negative weights (obtuse pairs) for a maximum-principle, fold-free embedding
+    W.data = np.maximum(W.data, 1e-8)
+    return _harmonic(W, known, P)
+
+
+def _enclose_annulus(Po: np.ndarray, Pi: np.ndarray, h: float) -> Patch | None:
+    """Triangulate the region between an outer loop and an island loop (planar view only)."""
+    ko, ki = len(Po), len(Pi)
+    P = np.r_[Po, Pi]
+    n = -_vector_area(Po)
+    if not np.linalg.norm(n) > 0:
+        return None
+    e1, e2 = _plane_frame(n)
+    c = Po.mean(axis=0)
+    Q = np.c_[(P - c) @ e1, (P - c) @ e2]
+    Qo, Qi = Q[:ko], Q[ko:]
+    if not (_polygon_is_simple(Qo) and _polygon_is_simple(Qi)):
+        return None
+    segs = np.r_[np.c_[np.arange(ko), (np.arange(ko) + 1) % ko],
+                 ko + np.c_[np.arange(ki), (np.arange(ki) + 1) % ki]]
+    # a point strictly inside the island polygon
+    Xi, Ti = _triangulate(Qi, segs[ko:] - ko, None, quality=False)
+    if len(Ti) == 0:
+        return None
+    d1, d2 = Xi[Ti[:, 1]] - Xi[Ti[:, 0]], Xi[Ti[:, 2]] - Xi[Ti[:, 0]]
+    areas = np.abs(d1[:, 0] * d2[:, 1] - d1[:, 1] * d2[:, 0])
+    seed = Xi[Ti[int(np.argmax(areas))]].mean(axis=0)
+    Lp = float(np.linalg.norm(Po - np.roll(Po, -1, axis=0), axis=1).sum())
+    L2 = float(np.linalg.norm(Qo - np.roll(Qo, -1, axis=0), axis=1).sum())
+    X2, T = _triangulate(Q, segs, _max_area_for(h * L2 / Lp), holes=seed[None])
+    if len(T) == 0 or len(X2) < ko + ki or not np.allclose(X2[: ko + ki], Q):
+        return None
+    # orientation: outer loop edges must be traversed backwards
+    he = np.stack([T, np.roll(T, -1, axis=1)], axis=2).reshape(-1, 2)
+    m = int(T.max()) + 1
+    code = set((he[:, 0] * m + he[:, 1]).tolist())
+    if 1 in code:  # half-edge 0 -> 1 (code 0 * m + 1): the outer loop traversed forwards
+        T = T[:, ::-1].copy()
+        he = np.stack([T, np.roll(T, -1, axis=1)], axis=2).reshape(-1, 2)
+        code = set((he[:, 0] * m + he[:, 1]).tolist())
+    inner_back = [((ko + (j + 1) % ki) * m + ko + j) in code for j in range(ki)]
+    outer_back = [(((j + 1) % ko) * m + j) in code for j in range(ko)]
+    if not (all(inner_back) and all(outer_back)):
+        return None
+    return Patch(X=_embed(P, X2, T), T=T, uv=X2, method="annulus", n_loop=ko + ki)
