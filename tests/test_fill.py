@@ -609,9 +609,9 @@ def test_cli_fill_and_inpaint(tmp_path, capsys):
 @needs_meshes
 def test_real_scan_rabbit_small_hole_filled_opening_kept_or_refused():
     """rabbit_scan has a 1104-edge opening (the scan's open bottom) and a 5-edge hole. With
-    keep_border the small hole is closed and the opening kept; without, the opening is refused
-    with a message pointing to keep_border (a planar fill would cut through the scan), and the
-    rest is still filled."""
+    keep_border the small hole is closed and the opening kept; without, the opening is
+    recognised as the open border by its size and left open with that reason, and the rest is
+    still filled."""
     from meshrepair.topology import boundary_loops
 
     V, F = shared_mesh("scans/rabbit_scan.ply")
@@ -621,5 +621,6 @@ def test_real_scan_rabbit_small_hole_filled_opening_kept_or_refused():
     check_mesh(kept.V, kept.F)
     full = fill_holes(V, F)
     assert [h.status for h in full.holes] == ["skipped", "filled"]
-    assert "keep_border" in full.holes[0].reason
+    # recognised as the open border by its size (issue 13), not tried and refused
+    assert "open border" in full.holes[0].reason
     assert np.array_equal(full.F, kept.F)

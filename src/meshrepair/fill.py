@@ -49,6 +49,7 @@ from .holes import (
     select_holes,
     self_intersections,
 )
+from .holes.budget import check_budget, check_fill_options
 from .solver import ADMMSolver, SolverOptions, Stage
 from .topology import edge_topology
 
@@ -217,19 +218,37 @@ def _drop_patches(V1: np.ndarray, F1: np.ndarray, reports: list[HoleReport], nV:
 
 
 def _intersecting(V: np.ndarray, F: np.ndarray, faces: np.ndarray,
-                  ignore: np.ndarray | None = None) -> int:
-    """Face pairs involving ``faces`` that intersect, not counting faces marked in ``ignore``."""
-    pairs = self_intersections(V, F, faces)
+                  ignore: np.ndarray | None = None, pairs: np.ndarray | None = None) -> int:
+    """Face pairs involving ``faces`` that intersect, not counting faces marked in ``ignore``
+    (``pairs``: precomputed pairs of a superset of ``faces``, filtered instead of recomputed)."""
+    if pairs is None:
+        pairs = self_intersections(V, F, faces)
+    elif len(pairs):
+        mine = np.zeros(len(F), bool)
+        mine[faces] = True
+        pairs = pairs[mine[pairs].any(axis=1)]
     if ignore is not None and len(pairs):
         pairs = pairs[~ignore[pairs].any(axis=1)]
     return len(pairs)
+
+
+def _finite_rows(V: np.ndarray, Vsafe: np.ndarray, rows: np.ndarray, what: str) -> np.ndarray:
+    """``V`` with the non-finite ``rows`` replaced by ``Vsafe`` (logged)."""
+    bad = rows[~np.isfinite(V[rows]).all(axis=1)]
+    if len(bad):
+        log.warning("%s gave %d non-finite vertex positions; kept the previous ones", what,
+                    len(bad))
+        V = V.copy()
+        V[bad] = Vsafe[bad]
+    return V
 
 
 def _fill_core(V: np.ndarray, F: np.ndarray, holes, skip: dict[int, str], *, denoise: bool,
                initial: str, refine: bool, edge_length: float | None, lam: float | None,
                th: float, a: float, max_iter: int, tol: float, rings: int, relax: float,
                inner_solver: str, inner_iters: int, check: bool,
-               callback: Callable[[dict], None] | None) -> FillResult:
+               callback: Callable[[dict], None] | None,
+               progress: Callable[[int, int], None] | None = None) -> FillResult:
     from .geometry import face_normals, sharp_edge_mask
 
     t0 = time.perf_counter()
@@ -237,23 +256,31 @@ def _fill_core(V: np.ndarray, F: np.ndarray, holes, skip: dict[int, str], *, den
     by_index = {h.index: h for h in holes}
     stage: dict[int, int] = {}  # hole index -> position in its list of enclosing methods
     t_enclose = t_initial = 0.0
+    first = True
     while True:
         ta = time.perf_counter()
         method = {h.index: _enclose_methods(h)[stage.get(h.index, 0)] for h in holes}
-        V1, F1, reports = enclose_holes(V, F, holes, skip, edge_length=edge_length, check=check,
-                                        intersections=False, method=method)
+        V1, F1, reports = enclose_holes(
+            V, F, holes, skip, edge_length=edge_length, check=check, intersections=False,
+            method=method, progress=None if progress is None or not first else progress)
+        first = False
         tb = time.perf_counter()
         Vm = V1
         if initial == "bilaplacian" and len(V1) > nV:
             V1 = fair_vertices(V1, F1, np.arange(nV, len(V1)), order=2, weights="cotan",
                                iterations=3)
+            V1 = _finite_rows(V1, Vm, np.arange(nV, len(V1)), "the thin-plate fairing")
         drop: dict[int, str] = {}
         retry: list[int] = []
         if check:
             dropped = np.zeros(len(F1), bool)  # faces of patches already refused
-            for i, (bv, bf) in _blocks(reports, nV, nF).items():
-                rep = next(r for r in reports if r.index == i)
-                n_x = _intersecting(V1, F1, bf, dropped)
+            blocks = _blocks(reports, nV, nF)
+            all_new = np.arange(nF, len(F1))
+            pairs0 = self_intersections(V1, F1, all_new) if len(all_new) else None
+            by_rep = {r.index: r for r in reports}
+            for i, (bv, bf) in blocks.items():
+                rep = by_rep[i]
+                n_x = _intersecting(V1, F1, bf, dropped, pairs=pairs0)
                 if n_x and initial == "bilaplacian":
                     unfaired = "unfaired" if method[i] == "liepa" else "membrane"
                     log.info("hole %d: the faired patch intersects the mesh; using the %s", i,
@@ -339,13 +366,16 @@ def _fill_core(V: np.ndarray, F: np.ndarray, holes, skip: dict[int, str], *, den
         res = solver.solve(V1[used], callback=callback)
         V1 = V1.copy()
         V1[used[~fixed]] = res.V[~fixed]
+        V1 = _finite_rows(V1, V_before, new_v, "the ADMM solve")
         history, iterations, stop_reason = res.history, res.iterations, res.stop_reason
         params.update(rings=rings, max_iter=max_iter, relax=relax)
     t3 = time.perf_counter()
     if check:
+        pairs1 = self_intersections(V1, F1, new_f) if len(new_f) else None
+        by_rep = {r.index: r for r in reports}
         for i, (bv, bf) in _blocks(reports, nV, nF).items():
-            rep = next(r for r in reports if r.index == i)
-            rep.n_intersections = _intersecting(V1, F1, bf)
+            rep = by_rep[i]
+            rep.n_intersections = _intersecting(V1, F1, bf, pairs=pairs1)
             if rep.n_intersections and not denoise and V1 is not V_before:
                 V1[bv] = V_before[bv]
                 rep.n_intersections = _intersecting(V1, F1, bf)
@@ -364,13 +394,10 @@ def _fill_core(V: np.ndarray, F: np.ndarray, holes, skip: dict[int, str], *, den
     )
 
 
-def _check_options(initial: str, max_iter: int, rings: int) -> None:
+def _check_options(initial: str, max_iter: int, rings: int, **numeric) -> None:
     if initial not in INITIAL_MODES:
         raise MeshRepairError(f"initial must be one of {INITIAL_MODES}, got {initial!r}")
-    if isinstance(max_iter, bool) or int(max_iter) != max_iter or max_iter < 0:
-        raise MeshRepairError(f"max_iter must be a non-negative integer, got {max_iter!r}")
-    if isinstance(rings, bool) or int(rings) != rings or rings < 1:
-        raise MeshRepairError(f"rings must be an integer >= 1, got {rings!r}")
+    check_fill_options(max_iter=max_iter, rings=rings, **numeric)
 
 
 # ------------------------------------------------------------------------------------------------
@@ -401,6 +428,7 @@ def fill_holes(
     inner_iters: int = 3,
     check: bool = True,
     callback: Callable[[dict], None] | None = None,
+    progress: Callable[[int, int], None] | None = None,
 ) -> FillResult:
     """Fill the holes of a triangle mesh smoothly, optionally denoising it in the same solve.
 
@@ -412,6 +440,9 @@ def fill_holes(
         Fill only holes with at most this many boundary vertices (= edges).
     keep_border : bool
         Leave the longest loop open (the intended border of a scan or of a model cut open).
+        Independently of it, a loop recognised as the open border of its surface by its size
+        (:func:`meshrepair.holes.border.find_borders`) is left open with the reason, unless it
+        is listed in ``holes``.
     exclude : sequence of int
         Hole indices (see :func:`meshrepair.holes.find_holes`: longest first) to leave open.
     holes : sequence of int, optional
@@ -449,6 +480,8 @@ def fill_holes(
         (``HoleReport.reason`` says which was kept: e.g. ``"plane"``, ``"plane, membrane"``,
         ``"liepa"``, ``"liepa, unfaired"``) before the hole is refused.
     callback : called with each ADMM history entry.
+    progress : called as ``progress(done, total)`` before each selected hole is enclosed (the
+        CLI feeds a progress bar over holes with it).
 
     Returns
     -------
@@ -460,23 +493,31 @@ def fill_holes(
     ------
     MeshRepairError
         For invalid meshes (:func:`meshrepair.validate.check_mesh`) or options (e.g. a hole index
-        that does not exist).
+        that does not exist, a non-finite or out-of-range number), or when the selected holes
+        would need more than :data:`meshrepair.holes.budget.MAX_NEW_FACES` new faces (estimated
+        before any work; the message gives the count).
     """
     from .holes import _find_holes
+    from .holes.border import find_borders
     from .io import as_arrays
     from .validate import check_mesh
 
     V, F = as_arrays(V, F)
     check_mesh(V, F, name="input mesh")
-    _check_options(initial, max_iter, rings)
+    _check_options(initial, max_iter, rings, edge_length=edge_length, lam=lam, th=th, a=a,
+                   tol=tol, relax=relax, inner_iters=inner_iters)
     found = _find_holes(V, F)
+    borders = find_borders(V, F, found)
     skip = select_holes(found, max_hole_size=max_hole_size, keep_border=keep_border,
-                        exclude=exclude, indices=holes)
-    log.info("fill_holes: %d holes found, %d selected", len(found), len(found) - len(skip))
+                        exclude=exclude, indices=holes, borders=borders)
+    check_budget([h for h in found if h.index not in skip], edge_length, what="fill_holes")
+    log.info("fill_holes: %d holes found, %d selected%s", len(found), len(found) - len(skip),
+             f" ({len(borders)} open border(s) left open)" if borders else "")
     res = _fill_core(V, F, found, skip, denoise=denoise, initial=initial, refine=refine,
                      edge_length=edge_length, lam=lam, th=th, a=a, max_iter=int(max_iter),
                      tol=tol, rings=int(rings), relax=relax, inner_solver=inner_solver,
-                     inner_iters=inner_iters, check=check, callback=callback)
+                     inner_iters=inner_iters, check=check, callback=callback,
+                     progress=progress)
     res.params.update(max_hole_size=max_hole_size, keep_border=keep_border,
                       exclude=list(exclude), holes=None if holes is None else list(holes))
     return res
@@ -644,6 +685,7 @@ def inpaint(
     inner_iters: int = 3,
     check: bool = True,
     callback: Callable[[dict], None] | None = None,
+    progress: Callable[[int, int], None] | None = None,
 ) -> FillResult:
     """Replace a damaged region of a mesh by a smooth patch.
 
@@ -659,7 +701,7 @@ def inpaint(
     region : vertex indices, a bool (or 0/1) mask of length nV, ``("sphere", center, radius)`` or
         ``("box", lo, hi)`` (see :func:`region_mask`).
     denoise, initial, refine, edge_length, lam, th, a, max_iter, tol, rings, relax, inner_solver,
-    inner_iters, check, callback : as in :func:`fill_holes`.
+    inner_iters, check, callback, progress : as in :func:`fill_holes`.
 
     Returns
     -------
@@ -680,7 +722,8 @@ def inpaint(
 
     V, F = as_arrays(V, F)
     check_mesh(V, F, name="input mesh")
-    _check_options(initial, max_iter, rings)
+    _check_options(initial, max_iter, rings, edge_length=edge_length, lam=lam, th=th, a=a,
+                   tol=tol, relax=relax, inner_iters=inner_iters)
     nV, _nF = len(V), len(F)
     vmask = region_mask(V, region)
     if not vmask.any():
@@ -728,10 +771,12 @@ def inpaint(
             skip[h.index] = (f"the region cuts the mesh into {n_parts} parts; filling each cut "
                              "separately would cap the parts instead of rejoining them: use a "
                              "region that does not go all the way round")
+    check_budget([h for h in found if h.index not in skip], edge_length, what="inpaint")
     res = _fill_core(V2, F2, found, skip, denoise=denoise, initial=initial, refine=refine,
                      edge_length=edge_length, lam=lam, th=th, a=a, max_iter=int(max_iter),
                      tol=tol, rings=int(rings), relax=relax, inner_solver=inner_solver,
-                     inner_iters=inner_iters, check=check, callback=callback)
+                     inner_iters=inner_iters, check=check, callback=callback,
+                     progress=progress)
     res.vertex_map = vmap
     res.removed_faces = np.flatnonzero(removed).astype(np.int64)
     res.params.update(region_vertices=int(vmask.sum()), removal_notes=notes)

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -175,7 +175,8 @@ def _check_indices(name: str, idx: Sequence[int] | None, n: int) -> list[int]:
 
 def select_holes(holes: Sequence[Hole], *, max_hole_size: int | None = None,
                  keep_border: bool = False, exclude: Sequence[int] = (),
-                 indices: Sequence[int] | None = None) -> dict[int, str]:
+                 indices: Sequence[int] | None = None,
+                 borders: Mapping[int, str] | None = None) -> dict[int, str]:
     """Decide which holes to fill.
 
     Parameters
@@ -189,7 +190,12 @@ def select_holes(holes: Sequence[Hole], *, max_hole_size: int | None = None,
     exclude : sequence of int
         Hole indices never filled.
     indices : sequence of int, optional
-        Fill only these holes (default: all).
+        Fill only these holes (default: all). A hole listed here is filled even when it is in
+        ``borders``.
+    borders : mapping of int to str, optional
+        Loops recognised as the open border of their surface
+        (:func:`meshrepair.holes.border.find_borders`), with the reason: not filled unless
+        listed in ``indices``.
 
     Returns
     -------
@@ -217,6 +223,8 @@ def select_holes(holes: Sequence[Hole], *, max_hole_size: int | None = None,
             skipped[h.index] = "excluded"
         elif only is not None and h.index not in only:
             skipped[h.index] = "not selected"
+        elif borders and h.index in borders and only is None:
+            skipped[h.index] = borders[h.index]
         elif max_hole_size is not None and h.n_boundary > max_hole_size:
             skipped[h.index] = f"larger than max_hole_size ({h.n_boundary} > {max_hole_size})"
     return skipped

@@ -2,7 +2,8 @@
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+import logging
+from collections.abc import Callable, Mapping, Sequence
 
 import numpy as np
 
@@ -11,6 +12,8 @@ from ._geom2d import Patch, _plane_frame, _polygon_is_simple, _vector_area
 from .detect import Hole, HoleReport
 from .intersect import self_intersections
 from .planar import ENCLOSE_METHODS, _enclose_annulus, enclose_loop
+
+log = logging.getLogger(__name__)
 
 
 def _split_chords(patch: Patch, bad: set[tuple[int, int]]) -> Patch:
@@ -128,7 +131,9 @@ def _existing_edge_codes(F: np.ndarray, n: int) -> np.ndarray:
 def enclose_holes(V: np.ndarray, F: np.ndarray, holes: Sequence[Hole],
                   skip: dict[int, str] | None = None, *, edge_length: float | None = None,
                   check: bool = True, intersections: bool = True,
-                  method: str | Mapping[int, str] = "auto"
+                  method: str | Mapping[int, str] = "auto",
+                  creases: Mapping[int, np.ndarray] | None = None,
+                  progress: Callable[[int, int], None] | None = None
                   ) -> tuple[np.ndarray, np.ndarray, list[HoleReport]]:
     """Enclose the selected holes of a mesh with initial (membrane) patches.
 
@@ -150,6 +155,11 @@ def enclose_holes(V: np.ndarray, F: np.ndarray, holes: Sequence[Hole],
         How each loop is triangulated (:func:`enclose_loop`: ``"auto"`` or ``"liepa"``), for all
         holes or per hole index (missing indices: ``"auto"``). Islands are always filled as
         planar annuli.
+    creases : mapping of int to (q, 2) int, optional
+        Per hole index, pairs of loop positions joined by a crease polyline through the patch
+        (constrained edges of the planar triangulation, see :mod:`.creases`).
+    progress : callable, optional
+        Called as ``progress(done, total)`` before each selected hole is enclosed.
 
     Returns
     -------
@@ -170,11 +180,25 @@ def enclose_holes(V: np.ndarray, F: np.ndarray, holes: Sequence[Hole],
         raise MeshRepairError(f"method must be one of {ENCLOSE_METHODS}, got {bad[0]!r}")
     reports: dict[int, HoleReport] = {}
     by_index = {h.index: h for h in holes}
+    longest_of_component: dict[int, int] = {}
+    for h in holes:  # holes are sorted longest first
+        longest_of_component.setdefault(h.component, h.index)
 
     # islands: a loop nested inside another hole is filled together with it as an annulus
     partner: dict[int, int] = {}
-    for ho in holes:
-        for hi in holes:
+    # candidate pairs from the loops' bounding boxes (the outer box padded by half its size, as
+    # in _nested_in), so many small holes do not cost a quadratic number of geometric tests
+    blo = np.array([V[h.vertices].min(axis=0) for h in holes]).reshape(-1, 3)
+    bhi = np.array([V[h.vertices].max(axis=0) for h in holes]).reshape(-1, 3)
+    bpad = 0.5 * (bhi - blo).max(axis=1, initial=0.0) if len(holes) else np.zeros(0)
+    order_lo = np.argsort(blo[:, 0]) if len(holes) else np.zeros(0, np.int64)
+    for io, ho in enumerate(holes):
+        lo_o, hi_o = blo[io] - bpad[io], bhi[io] + bpad[io]
+        a = np.searchsorted(blo[order_lo, 0], lo_o[0], side="left")
+        cand = order_lo[a:]
+        cand = cand[((blo[cand] >= lo_o) & (bhi[cand] <= hi_o)).all(axis=1)]
+        for ii in np.sort(cand).tolist():
+            hi = holes[ii]
             if hi.index == ho.index or hi.index in partner or ho.index in partner:
                 continue
             if hi.length < ho.length and _nested_in(V, F, ho, hi):
@@ -192,11 +216,13 @@ def enclose_holes(V: np.ndarray, F: np.ndarray, holes: Sequence[Hole],
 
     code_n = np.int64(1) << np.int64(31)
     edge_set = set(_existing_edge_codes(F, code_n).tolist())
+    vf_ptr, vf_idx = _vertex_faces(F, nV)
+    fbox = _LocalFaces(V, F)  # face bounding boxes of the input, for local checks
     newV: list[np.ndarray] = []
     newF: list[np.ndarray] = []
     n_added = 0
-    Vcur = V
-    Fcur = F
+    todo = [h for h in holes if h.index not in skip]
+    n_todo, n_done = len(todo), 0
     for h in holes:
         if h.index in reports:  # an island already reported with its outer loop
             continue
@@ -206,10 +232,20 @@ def enclose_holes(V: np.ndarray, F: np.ndarray, holes: Sequence[Hole],
         if h.index in skip:
             rep.reason = skip[h.index]
             continue
+        n_done += 1
+        if progress is not None:
+            progress(n_done, n_todo)
+        log.debug("hole %d (%d/%d): %d boundary edges", h.index, n_done, n_todo, h.n_boundary)
         if h.index in partner and h.length < by_index[partner[h.index]].length:
             rep.reason = (f"island inside hole {partner[h.index]}, which could not be filled "
                           "(see there)")
             continue  # island: handled with its outer loop
+        zero = _coincident_loop_vertices(V, h.vertices)
+        if zero is not None:
+            rep.reason = (f"zero-width hole: loop vertices {zero[0]} and {zero[1]} are at the "
+                          "same position (a seam of duplicated vertices); merge duplicate "
+                          "vertices (e.g. trimesh merge_vertices) instead of filling it")
+            continue
         h_len = edge_length
         try:
             if h.index in partner:
@@ -229,14 +265,20 @@ def enclose_holes(V: np.ndarray, F: np.ndarray, holes: Sequence[Hole],
                     continue
             elif methods[h.index] == "liepa":
                 gverts = h.vertices
+                Fcur = np.concatenate([F, *newF]) if newF else F
                 patch = enclose_loop(V[h.vertices], edge_length=h_len, method="liepa",
                                      opposite=_opposite_points(V, F, h.vertices),
                                      forbidden=_loop_chords(Fcur, h.vertices))
             else:
                 gverts = h.vertices
-                patch = enclose_loop(V[h.vertices], edge_length=h_len)
+                cr = None if creases is None else creases.get(h.index)
+                patch = enclose_loop(V[h.vertices], edge_length=h_len,
+                                     **({} if cr is None else {"creases": cr}))
         except MeshRepairError as exc:
             rep.reason = f"cannot triangulate: {exc}"
+            continue
+        if not np.isfinite(patch.X).all():
+            rep.reason = "degenerate loop: its patch has non-finite positions"
             continue
         k = patch.n_loop
         # chords (patch edges between two loop vertices) must not duplicate an existing edge
@@ -252,8 +294,8 @@ def enclose_holes(V: np.ndarray, F: np.ndarray, holes: Sequence[Hole],
                 break
             patch = _split_chords(patch, dup)
         if k == 3 and h.index not in partner:
-            tri = np.sort(gverts)
-            if (np.sort(Fcur, axis=1) == tri).all(axis=1).any():
+            inc = F[vf_idx[vf_ptr[gverts[0]]:vf_ptr[gverts[0] + 1]]]
+            if (np.sort(inc, axis=1) == np.sort(gverts)).all(axis=1).any():
                 rep.reason = ("the loop bounds a single isolated triangle; filling it would "
                               "create a two-sided sliver")
                 continue
@@ -262,18 +304,16 @@ def enclose_holes(V: np.ndarray, F: np.ndarray, holes: Sequence[Hole],
         Fp = gmap[patch.T]
         Vp = patch.X[k:]
         if check and m > 0:
-            Vtry = np.r_[Vcur, Vp]
-            reason = _patch_problem(Vtry, Fcur, Fp, np.arange(nV + n_added, nV + n_added + m),
-                                    h_len if h_len is not None else h.length / h.n_boundary,
-                                    intersections)
+            hh = h_len if h_len is not None else h.length / h.n_boundary
+            Vl, Fl, Fpl, il = fbox.local(Vp, Fp, newV, newF, nV, pad=2.0 * hh)
+            reason = _patch_problem(Vl, Fl, Fpl, il, hh, intersections,
+                                    border=h.index == longest_of_component[h.component])
             if reason:
                 rep.reason = reason
                 continue
         newV.append(Vp)
         newF.append(Fp)
         n_added += m
-        Vcur = np.r_[Vcur, Vp]
-        Fcur = np.r_[Fcur, Fp]
         e = np.sort(np.concatenate([Fp[:, [0, 1]], Fp[:, [1, 2]], Fp[:, [2, 0]]]), axis=1)
         edge_set.update((e[:, 0] * code_n + e[:, 1]).tolist())
         rep.status = "filled"
@@ -286,18 +326,90 @@ def enclose_holes(V: np.ndarray, F: np.ndarray, holes: Sequence[Hole],
             reports[isl.index] = HoleReport(
                 index=isl.index, n_boundary=isl.n_boundary, length=isl.length, status="filled",
                 reason=f"island: filled together with hole {h.index}", loop=isl.vertices.copy())
-    return Vcur, Fcur, [reports[h.index] for h in holes]
+    Vout = np.concatenate([V, *newV]) if newV else V
+    Fout = np.concatenate([F, *newF]) if newF else F
+    return Vout, Fout, [reports[h.index] for h in holes]
+
+
+def _vertex_faces(F: np.ndarray, nV: int) -> tuple[np.ndarray, np.ndarray]:
+    """Vertex -> incident faces in CSR form: faces of ``v`` are ``idx[ptr[v]:ptr[v + 1]]``."""
+    flat = F.ravel()
+    order = np.argsort(flat, kind="stable")
+    ptr = np.r_[0, np.cumsum(np.bincount(flat, minlength=nV))]
+    return ptr, order // 3
+
+
+def _coincident_loop_vertices(V: np.ndarray, loop: np.ndarray) -> tuple[int, int] | None:
+    """Two distinct loop vertices at the same position (a zero-width hole along a seam of
+    duplicated vertices), or None. O(k log k)."""
+    from scipy.spatial import cKDTree
+
+    P = V[loop]
+    scale = float(np.ptp(P, axis=0).max()) if len(P) else 0.0
+    if not scale > 0:
+        return (int(loop[0]), int(loop[1]))
+    pairs = cKDTree(P).query_pairs(1e-9 * scale, output_type="ndarray")
+    if len(pairs) == 0:
+        return None
+    i, j = pairs[0]
+    return int(loop[i]), int(loop[j])
+
+
+class _LocalFaces:
+    """Faces of a mesh near a box, from precomputed face bounding boxes (so checking one patch
+    costs O(nF) vectorised comparisons, not a k-d tree over the whole mesh)."""
+
+    def __init__(self, V: np.ndarray, F: np.ndarray):
+        self.V, self.F = V, F
+        T = V[F]
+        self.lo, self.hi = T.min(axis=1), T.max(axis=1)
+
+    def local(self, Vp, Fp, newV, newF, nV, pad):
+        """Local mesh of the faces overlapping the patch box: ``(Vl, Fl, Fpl, interior)`` with
+        the existing faces ``Fl``, the patch faces ``Fpl`` and the patch's interior vertices."""
+        Vall_new = np.concatenate([*newV, Vp]) if newV else Vp
+        Fall_prev = np.concatenate(newF) if newF else np.empty((0, 3), np.int64)
+
+        def pos(idx):
+            out = np.empty((len(idx), 3))
+            old = idx < nV
+            out[old] = self.V[idx[old]]
+            out[~old] = Vall_new[idx[~old] - nV]
+            return out
+
+        Pp = pos(Fp.ravel())
+        lo, hi = Pp.min(axis=0) - pad, Pp.max(axis=0) + pad
+        sel = np.flatnonzero(((self.lo <= hi) & (self.hi >= lo)).all(axis=1))
+        parts = [self.F[sel]]
+        if len(Fall_prev):
+            T = pos(Fall_prev.ravel()).reshape(-1, 3, 3)
+            ok = ((T.min(axis=1) <= hi) & (T.max(axis=1) >= lo)).all(axis=1)
+            parts.append(Fall_prev[ok])
+        Fl_g = np.concatenate(parts)
+        used = np.unique(np.r_[Fl_g.ravel(), Fp.ravel()])
+        loc = {int(g): i for i, g in enumerate(used.tolist())}
+        remap = np.vectorize(loc.__getitem__, otypes=[np.int64])
+        Vl = pos(used)
+        Fl = remap(Fl_g) if len(Fl_g) else np.empty((0, 3), np.int64)
+        Fpl = remap(Fp)
+        interior = np.flatnonzero(used >= nV + (len(Vall_new) - len(Vp)))
+        return Vl, Fl.reshape(-1, 3), Fpl, interior
 
 
 def _patch_problem(V: np.ndarray, F: np.ndarray, Fp: np.ndarray, interior: np.ndarray,
-                   h: float, intersections: bool) -> str:
-    """Reason to refuse a patch (empty string if fine)."""
+                   h: float, intersections: bool, border: bool = True) -> str:
+    """Reason to refuse a patch (empty string if fine). ``border``: the loop is the longest of
+    its component (only such a loop is said to be a border)."""
     from ..metrics import point_to_surface
 
-    d = point_to_surface(V[interior], V, F)
-    if np.mean(d < 0.2 * h) > 0.5:
-        return ("the patch would lie on the existing surface (the loop is probably the outer "
-                "border of an open surface: use keep_border or exclude it)")
+    if len(F) and len(interior):
+        d = point_to_surface(V[interior], V, F)
+        if np.mean(d < 0.2 * h) > 0.5:
+            if border:
+                return ("the patch would lie on the existing surface (the loop is probably the "
+                        "outer border of an open surface: use keep_border or exclude it)")
+            return ("the patch would lie on the existing surface (another sheet of the mesh "
+                    "covers the hole); exclude it or fill it manually")
     if not intersections:
         return ""
     Fall = np.r_[F, Fp]
