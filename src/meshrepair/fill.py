@@ -50,6 +50,7 @@ from .holes import (
     self_intersections,
 )
 from .holes.budget import check_budget, check_fill_options
+from .holes.creases import find_crease_routes
 from .solver import ADMMSolver, SolverOptions, Stage
 from .topology import edge_topology
 
@@ -214,6 +215,10 @@ def _drop_patches(V1: np.ndarray, F1: np.ndarray, reports: list[HoleReport], nV:
         if rep.index in drop:
             rep.status, rep.reason = "skipped", drop[rep.index]
             rep.n_new_vertices = rep.n_new_faces = 0
+            rep.n_creases = 0
+            rep.sharp_edges = np.empty((0, 2), np.int64)
+        elif len(rep.sharp_edges):
+            rep.sharp_edges = remap[rep.sharp_edges]
     return V1[keepV], remap[F1[keepF]]
 
 
@@ -232,6 +237,27 @@ def _intersecting(V: np.ndarray, F: np.ndarray, faces: np.ndarray,
     return len(pairs)
 
 
+def _crease_edges(reports: list[HoleReport]) -> np.ndarray:
+    """All patch edges on routed creases, ``(q, 2)`` output vertex indices."""
+    parts = [r.sharp_edges for r in reports if r.status == "filled" and len(r.sharp_edges)]
+    return np.concatenate(parts) if parts else np.empty((0, 2), np.int64)
+
+
+def _edge_ids(topo, pairs: np.ndarray, n: int) -> np.ndarray:
+    """Indices in ``topo.edges`` of the vertex pairs ``(q, 2)`` (pairs that are no edge are
+    dropped)."""
+    if len(pairs) == 0:
+        return np.empty(0, np.int64)
+    e = np.sort(topo.edges, axis=1)
+    code = e[:, 0] * np.int64(n) + e[:, 1]
+    order = np.argsort(code)
+    p = np.sort(np.asarray(pairs, np.int64), axis=1)
+    want = p[:, 0] * np.int64(n) + p[:, 1]
+    pos = np.clip(np.searchsorted(code[order], want), 0, len(code) - 1)
+    hit = code[order][pos] == want
+    return order[pos[hit]]
+
+
 def _finite_rows(V: np.ndarray, Vsafe: np.ndarray, rows: np.ndarray, what: str) -> np.ndarray:
     """``V`` with the non-finite ``rows`` replaced by ``Vsafe`` (logged)."""
     bad = rows[~np.isfinite(V[rows]).all(axis=1)]
@@ -248,7 +274,8 @@ def _fill_core(V: np.ndarray, F: np.ndarray, holes, skip: dict[int, str], *, den
                th: float, a: float, max_iter: int, tol: float, rings: int, relax: float,
                inner_solver: str, inner_iters: int, check: bool,
                callback: Callable[[dict], None] | None,
-               progress: Callable[[int, int], None] | None = None) -> FillResult:
+               progress: Callable[[int, int], None] | None = None,
+               creases: bool = True) -> FillResult:
     from .geometry import face_normals, sharp_edge_mask
 
     t0 = time.perf_counter()
@@ -260,15 +287,21 @@ def _fill_core(V: np.ndarray, F: np.ndarray, holes, skip: dict[int, str], *, den
     while True:
         ta = time.perf_counter()
         method = {h.index: _enclose_methods(h)[stage.get(h.index, 0)] for h in holes}
+        if first:
+            routes = find_crease_routes(V, F, holes, skip, th) if creases else {}
         V1, F1, reports = enclose_holes(
             V, F, holes, skip, edge_length=edge_length, check=check, intersections=False,
-            method=method, progress=None if progress is None or not first else progress)
+            method=method, creases=routes,
+            progress=None if progress is None or not first else progress)
         first = False
         tb = time.perf_counter()
         Vm = V1
         if initial == "bilaplacian" and len(V1) > nV:
-            V1 = fair_vertices(V1, F1, np.arange(nV, len(V1)), order=2, weights="cotan",
-                               iterations=3)
+            ce = _crease_edges(reports)
+            on_crease = np.unique(ce)
+            free = np.setdiff1d(np.arange(nV, len(V1)), on_crease)
+            V1 = fair_vertices(V1, F1, free, order=2, weights="cotan", iterations=3,
+                               exclude_rows=on_crease)
             V1 = _finite_rows(V1, Vm, np.arange(nV, len(V1)), "the thin-plate fairing")
         drop: dict[int, str] = {}
         retry: list[int] = []
@@ -324,11 +357,14 @@ def _fill_core(V: np.ndarray, F: np.ndarray, holes, skip: dict[int, str], *, den
     patch_edges[topo.face_edges[new_f].ravel()] = True
     edge_force = np.full(topo.n_edges, -1, np.int8)
     edge_force[patch_edges] = 0
+    crease_e = _edge_ids(topo, _crease_edges(reports), len(V1))
+    edge_force[crease_e] = 1  # routed creases: the MC penalty rebuilds them sharp
     history: list[dict] = []
     iterations = 0
     stop_reason = "no solve"
     params: dict = {"denoise": denoise, "initial": initial, "refine": refine, "th": th}
     M_E = sharp_edge_mask(face_normals(V1, F1), topo, th).astype(bool) & ~patch_edges
+    M_E[crease_e] = True
     V_before = V1
     if denoise:
         from .denoise import default_stages, lambda_from_noise
@@ -357,6 +393,9 @@ def _fill_core(V: np.ndarray, F: np.ndarray, holes, skip: dict[int, str], *, den
         topo_l = edge_topology(Fl, len(used))
         ef = np.full(topo_l.n_edges, -1, np.int8)
         ef[topo_l.face_edges[fidx >= nF].ravel()] = 0
+        ce = _crease_edges(reports)
+        if len(ce):
+            ef[_edge_ids(topo_l, loc[ce], len(used))] = 1
         stage = Stage(a=a, eps=1.2, beta2_ratio=5.0, mask="none", max_iter=max_iter,
                       min_iter=min(max_iter, 30), relax=relax, name="fill")
         opts = SolverOptions(lam=1.0, th=th, stages=(stage,), tol=tol, inner_solver=inner_solver,
@@ -429,6 +468,7 @@ def fill_holes(
     check: bool = True,
     callback: Callable[[dict], None] | None = None,
     progress: Callable[[int, int], None] | None = None,
+    creases: bool = True,
 ) -> FillResult:
     """Fill the holes of a triangle mesh smoothly, optionally denoising it in the same solve.
 
@@ -482,6 +522,11 @@ def fill_holes(
     callback : called with each ADMM history entry.
     progress : called as ``progress(done, total)`` before each selected hole is enclosed (the
         CLI feeds a progress bar over holes with it).
+    creases : bool
+        Continue the sharp creases (dihedral angle above ``th``) that end on a hole's loop
+        through the patch: paired across the hole or meeting at a corner, routed as
+        constrained edges, placed on their curves and kept sharp by the MC penalty
+        (:mod:`meshrepair.holes.creases`; ``HoleReport.n_creases``).
 
     Returns
     -------
@@ -517,7 +562,7 @@ def fill_holes(
                      edge_length=edge_length, lam=lam, th=th, a=a, max_iter=int(max_iter),
                      tol=tol, rings=int(rings), relax=relax, inner_solver=inner_solver,
                      inner_iters=inner_iters, check=check, callback=callback,
-                     progress=progress)
+                     progress=progress, creases=creases)
     res.params.update(max_hole_size=max_hole_size, keep_border=keep_border,
                       exclude=list(exclude), holes=None if holes is None else list(holes))
     return res
@@ -686,6 +731,7 @@ def inpaint(
     check: bool = True,
     callback: Callable[[dict], None] | None = None,
     progress: Callable[[int, int], None] | None = None,
+    creases: bool = True,
 ) -> FillResult:
     """Replace a damaged region of a mesh by a smooth patch.
 
@@ -701,7 +747,7 @@ def inpaint(
     region : vertex indices, a bool (or 0/1) mask of length nV, ``("sphere", center, radius)`` or
         ``("box", lo, hi)`` (see :func:`region_mask`).
     denoise, initial, refine, edge_length, lam, th, a, max_iter, tol, rings, relax, inner_solver,
-    inner_iters, check, callback, progress : as in :func:`fill_holes`.
+    inner_iters, check, callback, progress, creases : as in :func:`fill_holes`.
 
     Returns
     -------
@@ -776,7 +822,7 @@ def inpaint(
                      edge_length=edge_length, lam=lam, th=th, a=a, max_iter=int(max_iter),
                      tol=tol, rings=int(rings), relax=relax, inner_solver=inner_solver,
                      inner_iters=inner_iters, check=check, callback=callback,
-                     progress=progress)
+                     progress=progress, creases=creases)
     res.vertex_map = vmap
     res.removed_faces = np.flatnonzero(removed).astype(np.int64)
     res.params.update(region_vertices=int(vmask.sum()), removal_notes=notes)

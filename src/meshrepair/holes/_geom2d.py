@@ -3,7 +3,7 @@ extension, Triangle calls, plane frames, and the :class:`Patch` container."""
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 import scipy.sparse as sp
@@ -160,6 +160,11 @@ class Patch:
         ``"liepa"``.
     n_loop : int
         Number of loop vertices ``k`` (for an annulus, outer + inner).
+    sharp_edges : (q, 2) int64
+        Local edges on routed creases (:mod:`.creases`): their interior vertices lie on the
+        crease curves and the edges get the MC penalty in the solve.
+    n_creases : int
+        Crease segments routed through the patch.
     """
 
     X: np.ndarray
@@ -167,6 +172,8 @@ class Patch:
     uv: np.ndarray
     method: str
     n_loop: int
+    sharp_edges: np.ndarray = field(default_factory=lambda: np.empty((0, 2), np.int64))
+    n_creases: int = 0
 
 
 def _max_area_for(h2: float) -> float:

@@ -67,6 +67,10 @@ class HoleReport:
         Loop vertices, numbered in the output mesh.
     n_intersections : int
         Face pairs of the final patch intersecting other faces (-1 when not checked).
+    n_creases : int
+        Crease segments routed through the patch (:mod:`meshrepair.holes.creases`).
+    sharp_edges : (q, 2) int64
+        Patch edges on those creases (output vertex numbering), MC penalty in the solve.
     """
 
     index: int
@@ -78,13 +82,16 @@ class HoleReport:
     n_new_faces: int = 0
     loop: np.ndarray = field(default_factory=lambda: np.empty(0, np.int64), repr=False)
     n_intersections: int = -1
+    n_creases: int = 0
+    sharp_edges: np.ndarray = field(default_factory=lambda: np.empty((0, 2), np.int64),
+                                    repr=False)
 
     def as_dict(self) -> dict:
         """The report as plain Python values (for JSON logs)."""
         return {"index": self.index, "n_boundary": self.n_boundary, "length": self.length,
                 "status": self.status, "reason": self.reason,
                 "n_new_vertices": self.n_new_vertices, "n_new_faces": self.n_new_faces,
-                "n_intersections": self.n_intersections}
+                "n_intersections": self.n_intersections, "n_creases": self.n_creases}
 
 
 def _split_simple(loop: list[int]) -> list[list[int]]:

@@ -19,6 +19,7 @@ log = logging.getLogger(__name__)
 def _split_chords(patch: Patch, bad: set[tuple[int, int]]) -> Patch:
     """Split the local edges in ``bad`` (pairs of local indices) at their midpoints."""
     X, T, uv = patch.X.copy(), patch.T.copy(), patch.uv.copy()
+    sharp = [tuple(e) for e in patch.sharp_edges.tolist()]
     for a, b in sorted(bad):
         idx = np.flatnonzero((T == a).any(axis=1) & (T == b).any(axis=1))
         if len(idx) != 2:
@@ -36,7 +37,11 @@ def _split_chords(patch: Patch, bad: set[tuple[int, int]]) -> Patch:
             else:  # (a, c, b) -> (a, c, m), (m, c, b)
                 new += [[a, t[1], m], [m, t[1], b]]
         T = np.r_[np.delete(T, idx, axis=0), np.asarray(new, dtype=np.int64)]
-    return Patch(X=X, T=T, uv=uv, method=patch.method, n_loop=patch.n_loop)
+        if (a, b) in sharp or (b, a) in sharp:
+            sharp = [e for e in sharp if set(e) != {a, b}] + [(a, m), (m, b)]
+    return Patch(X=X, T=T, uv=uv, method=patch.method, n_loop=patch.n_loop,
+                 sharp_edges=np.asarray(sharp, np.int64).reshape(-1, 2),
+                 n_creases=patch.n_creases)
 
 
 def _loop_side_points(V: np.ndarray, F: np.ndarray, loop: np.ndarray) -> np.ndarray:
@@ -320,6 +325,10 @@ def enclose_holes(V: np.ndarray, F: np.ndarray, holes: Sequence[Hole],
         rep.reason = patch.method
         rep.n_new_vertices = m
         rep.n_new_faces = len(Fp)
+        if len(patch.sharp_edges):
+            rep.sharp_edges = gmap[patch.sharp_edges]
+            rep.n_creases = patch.n_creases
+            rep.reason += f", {patch.n_creases} crease{'s' if patch.n_creases > 1 else ''}"
         if h.index in partner:
             isl = by_index[partner[h.index]]
             rep.reason = f"annulus with island hole {isl.index}"

@@ -12,7 +12,8 @@ from ._geom2d import _cotan_weights_2d
 
 
 def fair_vertices(V: np.ndarray, F: np.ndarray, free: np.ndarray, *, order: int = 2,
-                  weights: str = "cotan", iterations: int = 1) -> np.ndarray:
+                  weights: str = "cotan", iterations: int = 1,
+                  exclude_rows: np.ndarray | None = None) -> np.ndarray:
     """Move the ``free`` vertices to a fair (harmonic or bi-Laplacian) position.
 
     ``order=2`` minimises ``sum_r A_r |(Δx)_r|²`` over the free vertices and their neighbours
@@ -32,6 +33,9 @@ def fair_vertices(V: np.ndarray, F: np.ndarray, free: np.ndarray, *, order: int 
         (umbrella; also regularises the vertex distribution)
     iterations : int
         Recompute the cotangent weights from the new positions and solve again this many times.
+    exclude_rows : (nV,) bool or int indices, optional
+        Fixed vertices whose Laplacian rows are left out of the energy (vertices on a sharp
+        crease: the surface has no tangent plane there, so each side is faired on its own).
 
     Returns
     -------
@@ -61,6 +65,10 @@ def fair_vertices(V: np.ndarray, F: np.ndarray, free: np.ndarray, *, order: int 
     on_bnd = np.zeros(nV, bool)
     on_bnd[topo.edges[topo.boundary].ravel()] = True
     rows &= ~(on_bnd & ~fm)
+    if exclude_rows is not None:
+        ex = np.zeros(nV, bool)
+        ex[np.asarray(exclude_rows)] = True
+        rows &= ~(ex & ~fm)
     r_idx = np.flatnonzero(rows)
     u_idx = np.flatnonzero(fm)
     for _ in range(max(1, iterations)):

@@ -8,6 +8,8 @@ triangulation). :func:`enclose_loop` dispatches to :mod:`.liepa` for ``method="l
 
 from __future__ import annotations
 
+import logging
+
 import numpy as np
 
 from ..errors import MeshRepairError
@@ -24,13 +26,15 @@ from ._geom2d import (
     _vector_area,
 )
 
+log = logging.getLogger(__name__)
+
 ENCLOSE_METHODS = ("auto", "liepa")
 """Ways :func:`enclose_loop` can triangulate a loop."""
 
 
 def enclose_loop(P: np.ndarray, *, edge_length: float | None = None, method: str = "auto",
                  opposite: np.ndarray | None = None,
-                 forbidden: np.ndarray | None = None) -> Patch:
+                 forbidden: np.ndarray | None = None, creases=None) -> Patch:
     """Triangulate the hole bounded by the closed 3-D polygon ``P``.
 
     Parameters
@@ -50,6 +54,10 @@ def enclose_loop(P: np.ndarray, *, edge_length: float | None = None, method: str
         ``"liepa"`` only: third vertex of the existing face on each loop edge.
     forbidden : (q, 2) int, optional
         ``"liepa"`` only: local index pairs that are existing edges (not to be used as chords).
+    creases : CreaseRoute, optional
+        ``"auto"`` only: crease segments to route through the patch as constrained edges of the
+        planar triangulation (:mod:`.creases`); their vertices are placed on the crease curves
+        (``Patch.sharp_edges``). Ignored (logged) when no planar view can hold them.
 
     Returns
     -------
@@ -93,6 +101,25 @@ def enclose_loop(P: np.ndarray, *, edge_length: float | None = None, method: str
     _, _, vt = np.linalg.svd(P - c, full_matrices=False)
     n_pca = vt[2] if np.dot(vt[2], -va) >= 0 else -vt[2]
     candidates.append(("pca-plane", n_pca))
+    if creases is not None and creases.n_creases:
+        # a view where the routes fit inside the loop: the loop's own planes, then the view
+        # of the corner (sum of the crease directions, e.g. (1, 1, 1) at a box corner)
+        views = list(candidates)
+        if len(creases.points):
+            vn = creases.view
+            if np.linalg.norm(vn) > 0:
+                views.append(("plane", vn if np.dot(vn, -va) >= 0 else -vn))
+        for method, n in views:
+            e1, e2 = _plane_frame(n)
+            Q = np.c_[(P - c) @ e1, (P - c) @ e2]
+            if not _polygon_is_simple(Q):
+                continue
+            L2 = float(np.linalg.norm(Q - np.roll(Q, -1, axis=0), axis=1).sum())
+            patch = _enclose_with_creases(P, Q, segs, h * L2 / Lp, creases, c, e1, e2, method)
+            if patch is not None:
+                return patch
+        log.info("the creases of a %d-loop could not be routed in a planar view; filling it "
+                 "without them", k)
     for method, n in candidates:
         e1, e2 = _plane_frame(n)
         Q = np.c_[(P - c) @ e1, (P - c) @ e2]
@@ -121,6 +148,80 @@ def enclose_loop(P: np.ndarray, *, edge_length: float | None = None, method: str
     T = _orient_patch(T, k)
     X = _embed(P, X2, T)
     return Patch(X=X, T=T, uv=X2, method="disc", n_loop=k)
+
+
+def _enclose_with_creases(P, Q, segs, h2, route, c, e1, e2, method) -> Patch | None:
+    """Planar triangulation of the loop polygon ``Q`` with the crease segments of ``route`` as
+    constraints; crease vertices on the Hermite curves, the rest on the membrane spanning loop
+    and creases. None when the routes do not fit inside the polygon."""
+    import triangle
+    from matplotlib.path import Path as MPath
+
+    k = len(P)
+    Qc = np.c_[(route.points - c) @ e1, (route.points - c) @ e2] if len(route.points) else \
+        np.empty((0, 2))
+    Qall = np.r_[Q, Qc]
+    cs = route.segments
+    poly = MPath(Q)
+    # every route must lie inside the polygon (sampled) and routes must not cross each other
+    t = np.linspace(0.02, 0.98, 25)[:, None]
+    for a, b in cs.tolist():
+        pts = Qall[a] + t * (Qall[b] - Qall[a])
+        if not poly.contains_points(pts).all():
+            return None
+    for i in range(len(cs)):
+        for j in range(i + 1, len(cs)):
+            if len(set(cs[i].tolist()) & set(cs[j].tolist())):
+                continue
+            if _segments_cross(Qall[cs[i, 0]], Qall[cs[i, 1]], Qall[cs[j, 0]], Qall[cs[j, 1]]):
+                return None
+    markers = np.r_[np.ones(k, np.int32), 2 + np.arange(len(cs), dtype=np.int32)]
+    data = {"vertices": Qall, "segments": np.r_[segs, cs],
+            "segment_markers": markers[:, None]}
+    from ._geom2d import MIN_ANGLE, _area_switch
+
+    out = triangle.triangulate(data, f"pYQq{MIN_ANGLE:g}" + _area_switch(_max_area_for(h2)))
+    X2 = np.asarray(out["vertices"], dtype=np.float64)
+    T = np.asarray(out.get("triangles", np.empty((0, 3))), dtype=np.int64).reshape(-1, 3)
+    if len(T) == 0 or len(X2) < len(Qall) or not np.allclose(X2[: len(Qall)], Qall):
+        return None
+    sub = np.asarray(out["segments"], np.int64).reshape(-1, 2)
+    mk = np.asarray(out["segment_markers"]).ravel()
+    sharp = sub[mk >= 2]
+    seg_of = mk[mk >= 2] - 2
+    T = _orient_patch(T, k)
+    # 3-D positions of crease vertices: the parameter along their 2-D segment, on the curve
+    known = np.zeros(len(X2), bool)
+    known[:k] = True
+    Xk = np.zeros((len(X2), 3))
+    Xk[:k] = P
+    for (u, w), j in zip(sharp.tolist(), seg_of.tolist(), strict=True):
+        a, b = cs[j]
+        d = Qall[b] - Qall[a]
+        for x in (u, w):
+            if known[x]:
+                continue
+            tt = float(np.clip((X2[x] - Qall[a]) @ d / max(d @ d, 1e-300), 0.0, 1.0))
+            Xk[x] = route.evaluate(j, np.array([tt]))[0]
+            known[x] = True
+    n = len(X2)
+    W = _cotan_weights_2d(X2, T, n)
+    W.data = np.maximum(W.data, 1e-8)
+    X = _harmonic(W, known, Xk[known]) if (~known).any() else Xk
+    # _harmonic keeps known rows in order of the mask: restore them exactly
+    X[known] = Xk[known]
+    return Patch(X=X, T=T, uv=X2, method=method, n_loop=k, sharp_edges=sharp,
+                 n_creases=len(cs))
+
+
+def _segments_cross(p, q, r, s) -> bool:
+    """Proper crossing of 2-D segments pq and rs."""
+    def orient(a, b, c):
+        return (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0])
+
+    d1, d2 = orient(p, q, r), orient(p, q, s)
+    d3, d4 = orient(r, s, p), orient(r, s, q)
+    return (d1 * d2 < 0) and (d3 * d4 < 0)
 
 
 def _embed(P: np.ndarray, X2: np.ndarray, T: np.ndarray) -> np.ndarray:
