@@ -240,7 +240,13 @@ def main() -> None:
                     help="comma-separated order of enclosing methods (auto, liepa); default: "
                          f"{','.join(meshrepair.fill.ENCLOSE_ORDER)}")
     ap.add_argument("--cases", default="cut,bunny,denoise",
-                    help="comma-separated subset of: cut, bunny, denoise")
+                    help="comma-separated subset of: cut, bunny, denoise, peers (cut-and-refill "
+                         "against CGAL, MeshLib, pymeshfix), real (the shared meshes with real "
+                         "holes at defaults: time and peak RSS)")
+    ap.add_argument("--smooth", default="spot,nefertiti",
+                    help="smooth meshes of the peers case (default: spot,nefertiti)")
+    ap.add_argument("--cad", default="fandisk,twelve,trim_star,rocker_arm",
+                    help="CAD meshes of the peers case (holes across a corner and a crease)")
     ap.add_argument("--picture", metavar="PNG", default=None,
                     help="only write the bunny before/after picture (docs/img/holes_bunny.png)")
     args = ap.parse_args()
@@ -253,14 +259,15 @@ def main() -> None:
             ap.error("--enclose takes methods among: auto, liepa")
         meshrepair.fill.ENCLOSE_ORDER = order
     cases = {c.strip() for c in args.cases.split(",")}
-    if cases - {"cut", "bunny", "denoise"}:
-        ap.error("--cases takes: cut, bunny, denoise")
+    if cases - {"cut", "bunny", "denoise", "peers", "real"}:
+        ap.error("--cases takes: cut, bunny, denoise, peers, real")
     _common.limit_threads(1)
     info = _common.machine_info()
     print(f"machine: {info.get('cpu', '?')}, {info.get('cores')} cores; python {info['python']}, "
           f"numpy {info['numpy']}, scipy {info.get('scipy')}; git {info.get('git')}")
-    lines = [HEADER]
-    print(HEADER, flush=True)
+    lines = [HEADER] if cases & {"cut", "bunny"} else []
+    if lines:
+        print(HEADER, flush=True)
     print(f"enclosing order: {','.join(meshrepair.fill.ENCLOSE_ORDER)}", flush=True)
     _common.warm_imports(jit=True)
     # compile (or load) the numba kernel of Liepa's triangulation outside the timings
@@ -274,6 +281,25 @@ def main() -> None:
         run_bunny(lines)
     if "denoise" in cases:
         run_denoise(lines)
+    if "real" in cases or "peers" in cases:
+        import _holes_peers
+
+        if "real" in cases:
+            lines.append("")
+            _holes_peers.run_real(lines)
+        if "peers" in cases:
+            notes: list[str] = []
+            smooth = {"spot": (0.47, 0.0, 0.2), "nefertiti": None}
+            sm = []
+            for nm in [x.strip() for x in args.smooth.split(",") if x.strip()]:
+                if smooth.get(nm) is None:
+                    Vx, Fx, _ = _common.read(nm)
+                    smooth[nm] = tuple(Vx[len(Vx) // 3])  # a deterministic vertex
+                sm.append((nm, smooth[nm]))
+            lines.append("")
+            _holes_peers.run_peers(cut_disc, lines, notes, sm,
+                                   [x.strip() for x in args.cad.split(",") if x.strip()])
+            lines.extend(notes)
     print("\n--- table ---")
     print("\n".join(lines))
 

@@ -12,7 +12,10 @@ hole is smoothed away. Here the crease is continued explicitly:
    angle is the mean dihedral angle of those edges, its sign convex or concave.
 2. *Pairs.* Two ends ``i, j`` with ``s = p_j - p_i`` are compatible when both point along the
    chord (``d_i · ŝ`` and ``-d_j · ŝ`` above ``cos`` :data:`PAIR_MAX_TURN`), have the same
-   convexity and dihedral angles within :data:`PAIR_MAX_ANGLE_GAP`; pairs are taken greedily
+   convexity, dihedral angles within :data:`PAIR_MAX_ANGLE_GAP` and chains outside the hole at
+   least :data:`CHAIN_PER_GAP` ``|s|`` long (short folds are not extended across a large
+   hole), and directions within :data:`PAIR_MAX_TILT` of the plane the hole spans; pairs are
+   taken greedily
    by ``d_i · ŝ - d_j · ŝ``. A pair is routed as the cubic Hermite curve from ``p_i`` with
    tangent ``|s| d_i`` to ``p_j`` with tangent ``-|s| d_j`` (a straight crease stays straight,
    a circular one is followed closely: end tangents from a one-sided quadratic difference, tangent
@@ -52,6 +55,19 @@ PAIR_MAX_ANGLE_GAP = 25.0
 CORNER_TOL = 0.25
 """Largest distance of the corner point from a crease line, relative to the distance along it."""
 
+CHAIN_PER_GAP = 0.25
+"""A crease is continued across a gap (to its partner or to the corner) only when its chain
+outside the hole is at least this fraction of the gap long: short sharp features (folds of a
+statue near a cut base) are not extended across a large hole."""
+
+PAIR_MAX_TILT = 30.0
+"""Largest angle (degrees) between a paired crease's direction and the plane the hole spans
+(orthogonal to its vector area): a crease crossing a hole runs within it; folds that dive into a
+flat cut (a statue's base) are not paired."""
+
+MAX_CHAIN = 64
+"""Edges walked back along a chain (enough evidence for any gap up to 256 edges)."""
+
 
 @dataclass
 class CreaseEnd:
@@ -68,6 +84,9 @@ class CreaseEnd:
     angle : float
         Mean dihedral angle (degrees) of the chain's last edges.
     convex : bool
+    chain_length : float
+        Length of the sharp chain walked back from the vertex (at most :data:`MAX_CHAIN`
+        edges).
     """
 
     pos: int
@@ -75,6 +94,7 @@ class CreaseEnd:
     direction: np.ndarray
     angle: float
     convex: bool
+    chain_length: float = np.inf
 
 
 @dataclass
@@ -163,7 +183,7 @@ def crease_ends(G: SharpGraph, loop: np.ndarray) -> list[CreaseEnd]:
             chain_v, chain_e = [v, u], [e]
             prev, cur = v, u
             straight = 1  # edges of the chain before it first turns (for the direction)
-            while len(chain_e) < max(MIN_CHAIN, TANGENT_EDGES):
+            while len(chain_e) < MAX_CHAIN:
                 nb2, ne2 = G.neighbours(cur)
                 cand = [(w, f) for w, f in zip(nb2.tolist(), ne2.tolist(), strict=True)
                         if w != prev and w not in chain_v]
@@ -208,13 +228,14 @@ def crease_ends(G: SharpGraph, loop: np.ndarray) -> list[CreaseEnd]:
                         break
                 if not moved:
                     break
+            cl = float(np.linalg.norm(np.diff(V[np.asarray(chain_v)], axis=0), axis=1).sum())
             ends.append(CreaseEnd(pos=p_end, vertex=v_end, direction=d,
                                   angle=float(G.angle[ce].mean()),
-                                  convex=bool(np.mean(G.convex[ce]) >= 0.5)))
+                                  convex=bool(np.mean(G.convex[ce]) >= 0.5), chain_length=cl))
     return ends
 
 
-def _corner_point(P: np.ndarray, D: np.ndarray) -> np.ndarray | None:
+def _corner_point(P: np.ndarray, D: np.ndarray, chain: np.ndarray) -> np.ndarray | None:
     """Least-squares meeting point of the lines ``P_i + t D_i`` in front of all of them."""
     A = np.zeros((3, 3))
     b = np.zeros(3)
@@ -226,9 +247,9 @@ def _corner_point(P: np.ndarray, D: np.ndarray) -> np.ndarray | None:
     if w[0] < 1e-3 * w[-1]:
         return None  # (nearly) parallel lines: no corner
     c = np.linalg.solve(A, b)
-    for p, d in zip(P, D, strict=True):
+    for p, d, cl in zip(P, D, chain, strict=True):
         t = float((c - p) @ d)
-        if not t > 0:
+        if not t > 0 or cl < CHAIN_PER_GAP * t:
             return None
         off = float(np.linalg.norm((c - p) - t * d))
         if off > CORNER_TOL * t:
@@ -255,8 +276,19 @@ def route_creases(V: np.ndarray, loop: np.ndarray, ends: list[CreaseEnd]) -> Cre
             if not L > 0:
                 continue
             ca, cb = float(ea.direction @ s) / L, float(-eb.direction @ s) / L
+            if min(ea.chain_length, eb.chain_length) < CHAIN_PER_GAP * L:
+                continue
             if min(ca, cb) > cos_turn:
                 cand.append((ca + cb, a, b))
+    from ._geom2d import _vector_area
+
+    va = _vector_area(P)
+    nva = float(np.linalg.norm(va))
+    if nva > 0:
+        nh = va / nva
+        sin_tilt = np.sin(np.radians(PAIR_MAX_TILT))
+        cand = [c for c in cand if abs(float(ends[c[1]].direction @ nh)) <= sin_tilt
+                and abs(float(ends[c[2]].direction @ nh)) <= sin_tilt]
     cand.sort(reverse=True)
     used: set[int] = set()
     segs, curves, kinds = [], [], []
@@ -280,8 +312,9 @@ def route_creases(V: np.ndarray, loop: np.ndarray, ends: list[CreaseEnd]) -> Cre
     points = np.empty((0, 3))
     view = np.zeros(3)
     if len(rest) >= 2:
-        c = _corner_point(np.array([P[e.pos] for e in rest]), np.array([e.direction
-                                                                         for e in rest]))
+        c = _corner_point(np.array([P[e.pos] for e in rest]),
+                          np.array([e.direction for e in rest]),
+                          np.array([e.chain_length for e in rest]))
         if c is not None:
             k = len(loop)
             points = c[None]

@@ -109,13 +109,30 @@ def enclose_loop(P: np.ndarray, *, edge_length: float | None = None, method: str
             vn = creases.view
             if np.linalg.norm(vn) > 0:
                 views.append(("plane", vn if np.dot(vn, -va) >= 0 else -vn))
+        planar_views = []
         for method, n in views:
             e1, e2 = _plane_frame(n)
             Q = np.c_[(P - c) @ e1, (P - c) @ e2]
             if not _polygon_is_simple(Q):
                 continue
             L2 = float(np.linalg.norm(Q - np.roll(Q, -1, axis=0), axis=1).sum())
-            patch = _enclose_with_creases(P, Q, segs, h * L2 / Lp, creases, c, e1, e2, method)
+            planar_views.append((Q, h * L2 / Lp, e1, e2, method))
+            patch = _enclose_with_creases(P, Q, segs, h * L2 / Lp, creases, c, e1, e2, method,
+                                          allow_drop=False)
+            if patch is not None:
+                return patch
+        # the disc (arc length on the unit circle) is convex: every chord between two ends is
+        # inside; a corner goes to the mean of its ends' disc positions
+        s_ = np.r_[0.0, np.cumsum(el)[:-1]] / Lp
+        Qd = np.c_[np.cos(2 * np.pi * s_), np.sin(2 * np.pi * s_)]
+        Qc = np.array([Qd[creases.segments[creases.segments[:, 1] == k + j, 0]].mean(axis=0)
+                       for j in range(len(creases.points))]).reshape(-1, 2)
+        patch = _enclose_with_creases(P, Qd, segs, h * 2 * np.pi / Lp, creases, c, None, None,
+                                      "disc", Qc=Qc, allow_drop=False)
+        if patch is not None:
+            return patch
+        for Q, h2, e1, e2, method in planar_views:  # the routes that fit a planar view
+            patch = _enclose_with_creases(P, Q, segs, h2, creases, c, e1, e2, method)
             if patch is not None:
                 return patch
         log.info("the creases of a %d-loop could not be routed in a planar view; filling it "
@@ -150,7 +167,8 @@ def enclose_loop(P: np.ndarray, *, edge_length: float | None = None, method: str
     return Patch(X=X, T=T, uv=X2, method="disc", n_loop=k)
 
 
-def _enclose_with_creases(P, Q, segs, h2, route, c, e1, e2, method) -> Patch | None:
+def _enclose_with_creases(P, Q, segs, h2, route, c, e1, e2, method, Qc=None,
+                          allow_drop: bool = True) -> Patch | None:
     """Planar triangulation of the loop polygon ``Q`` with the crease segments of ``route`` as
     constraints; crease vertices on the Hermite curves, the rest on the membrane spanning loop
     and creases. None when the routes do not fit inside the polygon."""
@@ -158,17 +176,39 @@ def _enclose_with_creases(P, Q, segs, h2, route, c, e1, e2, method) -> Patch | N
     from matplotlib.path import Path as MPath
 
     k = len(P)
-    Qc = np.c_[(route.points - c) @ e1, (route.points - c) @ e2] if len(route.points) else \
-        np.empty((0, 2))
+    if Qc is None:
+        Qc = np.c_[(route.points - c) @ e1, (route.points - c) @ e2] if len(route.points) else \
+            np.empty((0, 2))
     Qall = np.r_[Q, Qc]
     cs = route.segments
     poly = MPath(Q)
-    # every route must lie inside the polygon (sampled) and routes must not cross each other
+    # a route must lie inside the polygon (sampled): the others are dropped (a chord of the
+    # loop passing over the surround in this view); routes must not cross each other
     t = np.linspace(0.02, 0.98, 25)[:, None]
-    for a, b in cs.tolist():
-        pts = Qall[a] + t * (Qall[b] - Qall[a])
-        if not poly.contains_points(pts).all():
-            return None
+    inside = [bool(poly.contains_points(Qall[a] + t * (Qall[b] - Qall[a])).all())
+              for a, b in cs.tolist()]
+    if not any(inside) or (not allow_drop and not all(inside)):
+        return None
+    if not all(inside):
+        keep = np.flatnonzero(inside)
+        log.info("%d of %d crease routes leave the loop's planar view; dropped",
+                 len(cs) - len(keep), len(cs))
+        from .creases import CreaseRoute
+
+        route = CreaseRoute(points=route.points, segments=cs[keep],
+                            curves=[route.curves[i] for i in keep],
+                            kinds=[route.kinds[i] for i in keep], view=route.view)
+        cs = route.segments
+        used_pts = np.unique(cs[cs >= k]) - k
+        if len(used_pts) < len(route.points):
+            # renumber the extra points still in use
+            remap = -np.ones(len(route.points), np.int64)
+            remap[used_pts] = np.arange(len(used_pts))
+            cs = np.where(cs >= k, k + remap[np.maximum(cs - k, 0)], cs)
+            route = CreaseRoute(points=route.points[used_pts], segments=cs, curves=route.curves,
+                                kinds=route.kinds, view=route.view)
+            Qc = Qc[used_pts]
+            Qall = np.r_[Q, Qc]
     for i in range(len(cs)):
         for j in range(i + 1, len(cs)):
             if len(set(cs[i].tolist()) & set(cs[j].tolist())):
