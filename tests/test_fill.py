@@ -254,13 +254,17 @@ THREE_DISC_CASES = {"spot": 0.6, "fandisk": 0.9}
 def test_three_disc_cut_every_hole_filled(name):
     """The 3-disc cut of benchmarks/compare.py (radius 8 edges): on spot one loop has a reflex
     spike (two faces poking into the hole) and on fandisk two straddle 90° creases; the planar
-    patches cut through those faces, the minimum-weight triangulation does not."""
+    patches cut through those faces, the minimum-weight triangulation does not (and on fandisk
+    the crease routes do not either)."""
     V, F = _read(name)
     diag = np.linalg.norm(V.max(axis=0) - V.min(axis=0))
     Vc, Fc, F_gt = cut_discs(V, F)
     res = fill_holes(Vc, Fc)
     assert [h.status for h in res.holes] == ["filled"] * 3, res.summary()
-    assert any(h.reason.startswith("liepa") for h in res.holes), res.summary()
+    # spot: the fallback; fandisk: the creases continued through the holes (issue 13), which
+    # keeps the planar/disc patches clear of the surround
+    assert any(h.reason.startswith("liepa") or "crease" in h.reason for h in res.holes), \
+        res.summary()
     assert np.array_equal(res.V[: len(Vc)], Vc) and np.array_equal(res.F[: len(Fc)], Fc)
     assert np.array_equal(res.new_vertices, np.arange(len(Vc), len(res.V)))
     assert_closed_manifold(res.V, res.F)

@@ -237,6 +237,17 @@ def _intersecting(V: np.ndarray, F: np.ndarray, faces: np.ndarray,
     return len(pairs)
 
 
+def _sharp_vertices(V: np.ndarray, F: np.ndarray, th: float, nV: int) -> np.ndarray:
+    """(nV,) bool: vertices on an edge with dihedral angle above ``th``."""
+    from .geometry import face_normals, sharp_edge_mask
+
+    topo = edge_topology(F, nV)
+    m = sharp_edge_mask(face_normals(V, F), topo, th).astype(bool)
+    out = np.zeros(nV, bool)
+    out[topo.edges[m].ravel()] = True
+    return out
+
+
 def _crease_edges(reports: list[HoleReport]) -> np.ndarray:
     """All patch edges on routed creases, ``(q, 2)`` output vertex indices."""
     parts = [r.sharp_edges for r in reports if r.status == "filled" and len(r.sharp_edges)]
@@ -275,7 +286,7 @@ def _fill_core(V: np.ndarray, F: np.ndarray, holes, skip: dict[int, str], *, den
                inner_solver: str, inner_iters: int, check: bool,
                callback: Callable[[dict], None] | None,
                progress: Callable[[int, int], None] | None = None,
-               creases: bool = True) -> FillResult:
+               creases: bool = True, curvature: bool = True) -> FillResult:
     from .geometry import face_normals, sharp_edge_mask
 
     t0 = time.perf_counter()
@@ -289,6 +300,7 @@ def _fill_core(V: np.ndarray, F: np.ndarray, holes, skip: dict[int, str], *, den
         method = {h.index: _enclose_methods(h)[stage.get(h.index, 0)] for h in holes}
         if first:
             routes = find_crease_routes(V, F, holes, skip, th) if creases else {}
+            sharp_v = np.flatnonzero(_sharp_vertices(V, F, th, nV))
         V1, F1, reports = enclose_holes(
             V, F, holes, skip, edge_length=edge_length, check=check, intersections=False,
             method=method, creases=routes,
@@ -301,7 +313,8 @@ def _fill_core(V: np.ndarray, F: np.ndarray, holes, skip: dict[int, str], *, den
             on_crease = np.unique(ce)
             free = np.setdiff1d(np.arange(nV, len(V1)), on_crease)
             V1 = fair_vertices(V1, F1, free, order=2, weights="cotan", iterations=3,
-                               exclude_rows=on_crease)
+                               exclude_rows=on_crease, curvature=curvature,
+                               curvature_exclude=sharp_v)
             V1 = _finite_rows(V1, Vm, np.arange(nV, len(V1)), "the thin-plate fairing")
         drop: dict[int, str] = {}
         retry: list[int] = []
@@ -469,6 +482,7 @@ def fill_holes(
     callback: Callable[[dict], None] | None = None,
     progress: Callable[[int, int], None] | None = None,
     creases: bool = True,
+    curvature: bool = True,
 ) -> FillResult:
     """Fill the holes of a triangle mesh smoothly, optionally denoising it in the same solve.
 
@@ -527,6 +541,10 @@ def fill_holes(
         through the patch: paired across the hole or meeting at a corner, routed as
         constrained edges, placed on their curves and kept sharp by the MC penalty
         (:mod:`meshrepair.holes.creases`; ``HoleReport.n_creases``).
+    curvature : bool
+        With ``initial="bilaplacian"``: curvature continuity (the patch's Laplacian fitted to
+        the surround's mean curvature interpolated over it, :func:`meshrepair.holes.fair_vertices`
+        ``curvature=True``); False gives the plain thin plate.
 
     Returns
     -------
@@ -562,7 +580,7 @@ def fill_holes(
                      edge_length=edge_length, lam=lam, th=th, a=a, max_iter=int(max_iter),
                      tol=tol, rings=int(rings), relax=relax, inner_solver=inner_solver,
                      inner_iters=inner_iters, check=check, callback=callback,
-                     progress=progress, creases=creases)
+                     progress=progress, creases=creases, curvature=curvature)
     res.params.update(max_hole_size=max_hole_size, keep_border=keep_border,
                       exclude=list(exclude), holes=None if holes is None else list(holes))
     return res
@@ -732,6 +750,7 @@ def inpaint(
     callback: Callable[[dict], None] | None = None,
     progress: Callable[[int, int], None] | None = None,
     creases: bool = True,
+    curvature: bool = True,
 ) -> FillResult:
     """Replace a damaged region of a mesh by a smooth patch.
 
@@ -747,7 +766,7 @@ def inpaint(
     region : vertex indices, a bool (or 0/1) mask of length nV, ``("sphere", center, radius)`` or
         ``("box", lo, hi)`` (see :func:`region_mask`).
     denoise, initial, refine, edge_length, lam, th, a, max_iter, tol, rings, relax, inner_solver,
-    inner_iters, check, callback, progress, creases : as in :func:`fill_holes`.
+    inner_iters, check, callback, progress, creases, curvature : as in :func:`fill_holes`.
 
     Returns
     -------
@@ -822,7 +841,7 @@ def inpaint(
                      edge_length=edge_length, lam=lam, th=th, a=a, max_iter=int(max_iter),
                      tol=tol, rings=int(rings), relax=relax, inner_solver=inner_solver,
                      inner_iters=inner_iters, check=check, callback=callback,
-                     progress=progress, creases=creases)
+                     progress=progress, creases=creases, curvature=curvature)
     res.vertex_map = vmap
     res.removed_faces = np.flatnonzero(removed).astype(np.int64)
     res.params.update(region_vertices=int(vmask.sum()), removal_notes=notes)
