@@ -230,6 +230,53 @@ def bunny_picture(path: str) -> None:
     print(f"wrote {path}", flush=True)
 
 
+def crease_picture(path: str, name: str = "fandisk", kind: str = "crease",
+                   radius: int = 8) -> None:
+    """docs/img/holes_crease.png: a hole cut across a crease of a CAD mesh, refilled by
+    meshrepair (crease continued) and by CGAL refine-and-fair, next to the truth."""
+    import _holes_peers
+
+    from meshrepair.render import compare_figure
+
+    V, F, _ = _common.read(name)
+    c = [x for x in _holes_peers.pick_centres(V, F) if x[0] == kind][0][1]
+    Vc, Fc, F_rm = cut_disc(V, F, c, radius)
+    le = mean_edge_length(V, F)
+    diag = float(np.linalg.norm(np.ptp(V, axis=0)))
+    outs = [("truth", V, F, None), ("cut", Vc, Fc, None)]
+    for mname in ("meshrepair", "CGAL refine+fair"):
+        fn = _holes_peers.PEERS[mname]
+        try:
+            Vo, Fo = fn(Vc, Fc, le)
+        except Exception as exc:  # noqa: BLE001
+            print(f"{mname} skipped: {exc!r}")
+            continue
+        new = _holes_peers.new_faces(Vc, Fc, Vo, Fo)
+        m = _holes_peers.measure(V, F_rm, V, F, Vo, Fo, new, diag, le)
+        outs.append((f"{mname}\nnormal {m[2]:.1f}°, crease {m[4]:.0f}° (truth {m[5]:.0f}°)",
+                     Vo, Fo, new))
+    centre = V[c]
+    # view along the mean normal of the faces round the centre; crop to the neighbourhood
+    fn_ = face_normals(V, F)
+    near = np.linalg.norm(V[F].mean(axis=1) - centre, axis=1) < 3 * le
+    n = fn_[near].sum(axis=0)
+    n /= np.linalg.norm(n)
+    az, el = np.degrees(np.arctan2(n[0], n[2])), np.degrees(np.arcsin(np.clip(n[1], -1, 1)))
+    meshes, titles, regions = [], [], []
+    for title, Vx, Fx, new in outs:
+        keep = np.linalg.norm(Vx[Fx].mean(axis=1) - centre, axis=1) < 1.4 * radius * le
+        reg = np.zeros(len(Fx), bool)
+        if new is not None:
+            reg[new] = True
+        meshes.append((Vx, Fx[keep]))
+        regions.append(reg[keep])
+        titles.append(title)
+    compare_figure(meshes, titles, out_path=path, width=420, height=420, azimuth=az,
+                   elevation=el, fit="first", region_mask=regions, color_by="none",
+                   shading="flat")
+    print(f"wrote {path}", flush=True)
+
+
 def main() -> None:
     import argparse
 
@@ -249,9 +296,14 @@ def main() -> None:
                     help="CAD meshes of the peers case (holes across a corner and a crease)")
     ap.add_argument("--picture", metavar="PNG", default=None,
                     help="only write the bunny before/after picture (docs/img/holes_bunny.png)")
+    ap.add_argument("--crease-picture", metavar="PNG", default=None,
+                    help="only write the crease-through-a-hole picture (docs/img/holes_crease.png)")
     args = ap.parse_args()
     if args.picture:
         bunny_picture(args.picture)
+        return
+    if args.crease_picture:
+        crease_picture(args.crease_picture)
         return
     if args.enclose:
         order = tuple(m.strip() for m in args.enclose.split(","))

@@ -20,10 +20,13 @@ hole is smoothed away. Here the crease is continued explicitly:
    tangent ``|s| d_i`` to ``p_j`` with tangent ``-|s| d_j`` (a straight crease stays straight,
    a circular one is followed closely: end tangents from a one-sided quadratic difference, tangent
    length ``|s| · 2 tan(θ/4) / sin(θ/2)`` for a turn ``θ``, the cubic nearest to an arc).
-3. *Corners.* Two or more ends left unpaired whose lines nearly meet in front of all of them
+3. *Corners.* :data:`MIN_CORNER` or more ends left unpaired whose lines nearly meet in front of
+   all of them
    (the least-squares point ``c`` of the lines ``p_i + t d_i``, ``t > 0``, within
    :data:`CORNER_TOL` of every line relative to its distance) are routed as straight segments to
    ``c``: the corner where three creases of a box meet is rebuilt at the lines' intersection.
+   A single leftover end whose line meets a paired crease ends there (a T-junction: the pair is
+   split at the meeting point).
 
 The routes are constrained segments of the planar triangulation (:func:`.planar.enclose_loop`);
 the patch vertices on them are placed on the curves and kept as Dirichlet data of the fairing
@@ -59,6 +62,10 @@ CHAIN_PER_GAP = 0.25
 """A crease is continued across a gap (to its partner or to the corner) only when its chain
 outside the hole is at least this fraction of the gap long: short sharp features (folds of a
 statue near a cut base) are not extended across a large hole."""
+
+MIN_CORNER = 3
+"""Crease ends needed for a corner: three creases meeting (a box corner); two lines that nearly
+meet are too often two unrelated features of an organic surface (measured on nefertiti)."""
 
 PAIR_MAX_TILT = 30.0
 """Largest angle (degrees) between a paired crease's direction and the plane the hole spans
@@ -111,7 +118,7 @@ class CreaseRoute:
         Per segment, Hermite data ``(p0, m0, p1, m1)`` of the 3-D curve from its first to its
         second end.
     kinds : list of str
-        ``"pair"`` or ``"corner"`` per segment.
+        ``"pair"``, ``"junction"`` or ``"corner"`` per segment.
     view : (3,) float
         A direction to look at a corner from (sum of the directions of its creases), tried as
         a projection plane normal when the loop's own planes cannot hold the routes.
@@ -306,22 +313,65 @@ def route_creases(V: np.ndarray, loop: np.ndarray, ends: list[CreaseEnd]) -> Cre
         curves.append(np.stack([p0, m * ea.direction, p1, -m * eb.direction]))
         kinds.append("pair")
     rest = [e for i, e in enumerate(ends) if i not in used]
+    # T-junctions: a leftover crease whose line meets a paired crease ends on it (fandisk: a
+    # concave crease meeting a straight convex one); the pair is split at the junction
+    k = len(loop)
+    points_t: list[np.ndarray] = []
+    left = []
+    for e in rest:
+        best = None
+        for j, kind in enumerate(kinds):
+            if kind != "pair":
+                continue
+            tt = np.linspace(0.05, 0.95, 91)
+            Q = CreaseRoute(curves=[curves[j]]).evaluate(0, tt)
+            rel = Q - P[e.pos]
+            s_ = rel @ e.direction
+            off = np.linalg.norm(rel - s_[:, None] * e.direction, axis=1)
+            ok = (s_ > 0) & (off <= CORNER_TOL * s_) & (e.chain_length >= CHAIN_PER_GAP * s_)
+            if ok.any():
+                i = int(np.flatnonzero(ok)[np.argmin(off[ok])])
+                if best is None or off[i] < best[0]:
+                    best = (off[i], j, float(tt[i]), Q[i])
+        if best is None:
+            left.append(e)
+            continue
+        _, j, t0, J = best
+        a, b = segs[j]
+        p0, m0, p1, m1 = curves[j]
+
+        def dH(t, p0=p0, m0=m0, p1=p1, m1=m1):
+            return ((6 * t * t - 6 * t) * p0 + (3 * t * t - 4 * t + 1) * m0
+                    + (-6 * t * t + 6 * t) * p1 + (3 * t * t - 2 * t) * m1)
+
+        jidx = k + len(points_t)
+        points_t.append(J)
+        segs[j] = (a, jidx)
+        curves[j] = np.stack([p0, m0 * t0, J, dH(t0) * t0])
+        kinds[j] = "junction"
+        segs.append((b, jidx))
+        curves.append(np.stack([p1, -m1 * (1 - t0), J, -dH(t0) * (1 - t0)]))
+        kinds.append("junction")
+        segs.append((e.pos, jidx))
+        curves.append(np.stack([P[e.pos], J - P[e.pos], J, J - P[e.pos]]))
+        kinds.append("junction")
+    rest = left
     # one end per loop vertex (two chains from the same vertex cannot both reach a corner)
     seen: set[int] = set()
     rest = [e for e in rest if not (e.pos in seen or seen.add(e.pos))]
-    points = np.empty((0, 3))
+    points = np.asarray(points_t, float).reshape(-1, 3)
     view = np.zeros(3)
-    if len(rest) >= 2:
+    if len(rest) >= MIN_CORNER:
         c = _corner_point(np.array([P[e.pos] for e in rest]),
                           np.array([e.direction for e in rest]),
                           np.array([e.chain_length for e in rest]))
         if c is not None:
-            k = len(loop)
-            points = c[None]
+            kc = k + len(points)
+            points = np.r_[points, c[None]]
             view = np.sum([e.direction for e in rest], axis=0)
             for e in rest:
                 p0 = P[e.pos]
-                segs.append((e.pos, k))
+                segs.append((e.pos, kc))
                 curves.append(np.stack([p0, c - p0, c, c - p0]))  # straight
                 kinds.append("corner")
     if not segs:
