@@ -28,7 +28,14 @@ roughness, for comparison). ``t`` is wall seconds of
 ``pca-plane``, ``disc``: planar projection; ``liepa``: Liepa's minimum-weight triangulation, the
 fallback when a planar patch intersects the surface).
 
-Usage: ``python benchmarks/holes.py [--enclose auto,liepa] [--cases cut,bunny,denoise]``
+Issue 13 cases (``benchmarks/_holes_peers.py``): ``real`` fills every shared mesh with real holes
+at defaults and prints time and peak RSS; ``peers`` cuts discs from smooth meshes (radii 4, 8, 16)
+and across corners and creases of CAD meshes (radii 4, 8) and refills them with meshrepair, CGAL
+``triangulate_refine_and_fair_hole``, MeshLib ``fillHoleNicely`` and pymeshfix (mean/Hausdorff
+patch distance, normal deviation, crease angle restored vs truth, time, peak memory);
+``--crease-picture PNG`` draws docs/img/holes_crease.png.
+
+Usage: ``python benchmarks/holes.py [--enclose auto,liepa] [--cases cut,bunny,denoise,real,peers]``
 (about a minute). ``--enclose`` sets the order in which :data:`meshrepair.fill.ENCLOSE_ORDER`
 tries the enclosing methods (default: the library's), e.g. ``liepa,auto`` to try Liepa's
 triangulation first.
