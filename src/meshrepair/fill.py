@@ -237,6 +237,47 @@ def _intersecting(V: np.ndarray, F: np.ndarray, faces: np.ndarray,
     return len(pairs)
 
 
+SEAM_RETRY_FACTOR = 1.5
+SEAM_RETRY_MARGIN = 3.0
+"""A planar patch whose mean dihedral angle across its loop exceeds
+``SEAM_RETRY_FACTOR * surround + SEAM_RETRY_MARGIN`` degrees (surround: the original edges within
+3 rings) is enclosed again by Liepa's triangulation and the smoother seam kept. Measured on the
+peers benchmark (docs/holes.md): rocker_arm r=8 seams 25.3° / 19.6° vs surround 7.9° / 8.4°
+(Liepa: 8.6° / 5.8°, patch distance 0.62× / 0.59×), trim_star crease r=8 14.4° vs 5.3° (Liepa
+7.0°, 0.85×); unchanged below the rule: spot (1.7° vs 1.6°), twelve (5.6° vs 2.1°)."""
+
+
+def _seam_angle(V: np.ndarray, F: np.ndarray, faces: np.ndarray, nF: int, ring: bool = False):
+    """Mean dihedral angle (degrees) across the loop edges of the patch ``faces`` (edges between
+    one of them and an original face); with ``ring``, also that of the original edges within 3
+    rings of the patch."""
+    from .geometry import dihedral_angles, face_normals
+
+    near_v = np.zeros(len(V), bool)
+    near_v[F[faces].ravel()] = True
+    reach = near_v.copy()
+    for _ in range(4 if ring else 1):
+        reach[F[reach[F].any(axis=1)].ravel()] = True
+    fl = np.flatnonzero(reach[F].any(axis=1))
+    Fl = F[fl]
+    topo = edge_topology(Fl, len(V))
+    ang = dihedral_angles(face_normals(V, Fl), topo)
+    mine = np.isin(fl, faces)
+    a, b = topo.edge_faces[:, 0], topo.edge_faces[:, 1]
+    inner = b >= 0
+    b = np.maximum(b, 0)
+    seam_e = inner & (mine[a] != mine[b]) & (fl[np.where(mine[a], b, a)] < nF)
+    seam = float(ang[seam_e].mean()) if seam_e.any() else 0.0
+    if not ring:
+        return seam
+    ring_v = near_v.copy()
+    for _ in range(3):
+        ring_v[Fl[ring_v[Fl].any(axis=1)].ravel()] = True
+    orig = (fl < nF) & ring_v[Fl].all(axis=1)
+    sur = inner & orig[a] & orig[b]
+    return seam, float(ang[sur].mean()) if sur.any() else 0.0
+
+
 def _sharp_vertices(V: np.ndarray, F: np.ndarray, th: float, nV: int) -> np.ndarray:
     """(nV,) bool: vertices on an edge with dihedral angle above ``th``."""
     from .geometry import face_normals, sharp_edge_mask
@@ -295,6 +336,9 @@ def _fill_core(V: np.ndarray, F: np.ndarray, holes, skip: dict[int, str], *, den
     stage: dict[int, int] = {}  # hole index -> position in its list of enclosing methods
     t_enclose = t_initial = 0.0
     first = True
+    seam_prev: dict[int, float] = {}  # hole -> seam angle of its planar patch (seam trial)
+    locked: set[int] = set()
+    revert: list[int] = []
     while True:
         ta = time.perf_counter()
         method = {h.index: _enclose_methods(h)[stage.get(h.index, 0)] for h in holes}
@@ -337,6 +381,30 @@ def _fill_core(V: np.ndarray, F: np.ndarray, holes, skip: dict[int, str], *, den
                     if not n_x:
                         rep.reason += f", {unfaired}"
                 if not n_x:
+                    # choose by measurement: a planar patch meeting its surround at a kink is
+                    # tried again with Liepa's triangulation, and the smoother seam is kept
+                    if i in seam_prev and method[i] == "liepa" and i not in locked:
+                        seam = _seam_angle(V1, F1, bf, nF)
+                        if not seam < seam_prev[i]:
+                            log.info("hole %d: the minimum-weight patch's seam (%.1f°) is no "
+                                     "smoother than the planar one (%.1f°); keeping the planar",
+                                     i, seam, seam_prev[i])
+                            revert.append(i)
+                        locked.add(i)
+                    elif (initial == "bilaplacian" and method[i] == "auto" and i not in locked
+                          and rep.n_creases == 0 and not rep.reason.startswith("annulus")
+                          and len(_enclose_methods(by_index[i])) > 1):
+                        seam, ring = _seam_angle(V1, F1, bf, nF, ring=True)
+                        if seam > SEAM_RETRY_FACTOR * ring + SEAM_RETRY_MARGIN:
+                            log.info("hole %d: the planar patch meets its surround at %.1f° "
+                                     "(surround %.1f°); trying the minimum-weight "
+                                     "triangulation", i, seam, ring)
+                            seam_prev[i] = seam
+                            retry.append(i)
+                    continue
+                if i in seam_prev and method[i] == "liepa" and i not in locked:
+                    locked.add(i)  # the seam trial intersects: back to the planar patch
+                    revert.append(i)
                     continue
                 dropped[bf] = True
                 nxt = stage.get(i, 0) + 1
@@ -354,10 +422,13 @@ def _fill_core(V: np.ndarray, F: np.ndarray, holes, skip: dict[int, str], *, den
                            "keep_border); exclude it or fill it manually")
         t_enclose += tb - ta
         t_initial += time.perf_counter() - tb
-        if not retry:
+        if not retry and not revert:
             break
         for i in retry:
             stage[i] = stage.get(i, 0) + 1
+        for i in revert:
+            stage[i] = 0
+        revert = []
     if drop:
         V1, F1 = _drop_patches(V1, F1, reports, nV, nF, drop)
     t2 = time.perf_counter()
