@@ -162,3 +162,53 @@ def test_sphere_cap_refilled_by_the_sphere(z_cut, tol):
     plain = fill_holes(Vc, Fc, refine=False, curvature=False)
     err_plain = np.abs(np.linalg.norm(plain.V[plain.new_vertices], axis=1) - 1.0)
     assert err.max() < 0.5 * err_plain.max()
+
+
+def test_t_junction_route():
+    """A leftover crease whose line meets a paired crease ends on it (the pair is split)."""
+    from meshrepair.holes.creases import CreaseEnd
+
+    V = np.array([[-1.0, 0, 0], [0, -1.0, 0], [1.0, 0, 0], [0, 1.0, 0]])
+    loop = np.arange(4)
+    ends = [CreaseEnd(pos=0, vertex=0, direction=np.array([1.0, 0, 0]), angle=90.0, convex=True),
+            CreaseEnd(pos=2, vertex=2, direction=np.array([-1.0, 0, 0]), angle=90.0,
+                      convex=True),
+            CreaseEnd(pos=1, vertex=1, direction=np.array([0, 1.0, 0]), angle=60.0,
+                      convex=False)]
+    r = route_creases(V, loop, ends)
+    assert r.kinds == ["junction"] * 3 and len(r.points) == 1
+    assert np.allclose(r.points[0], 0.0, atol=0.02)
+    assert sorted(r.segments[:, 0].tolist()) == [0, 1, 2] and (r.segments[:, 1] == 4).all()
+    for j in range(3):  # every sub-curve runs from its loop end to the junction
+        a, b = r.evaluate(j, np.array([0.0, 1.0]))
+        assert np.allclose(a, V[r.segments[j, 0]]) and np.allclose(b, r.points[0])
+
+
+def test_l_prism_concave_crease_and_mixed_corner():
+    """An L-shaped prism: a hole across its concave crease, and one on the corner where that
+    concave crease meets two convex ones."""
+    import triangle
+    import trimesh
+
+    # profile in the xz plane, extruded along y over [0, 2]; caps by Triangle, sides as quads
+    prof = np.array([[0, 0], [2, 0], [2, 1], [1, 1], [1, 2], [0, 2]], float)
+    k = len(prof)
+    t = triangle.triangulate({"vertices": prof, "segments": np.c_[np.arange(k),
+                                                                  (np.arange(k) + 1) % k]}, "p")
+    T = np.asarray(t["triangles"])
+    V0 = np.c_[prof[:, 0], np.zeros(k), prof[:, 1]]
+    V1 = V0 + [0, 2.0, 0]
+    Vm = np.r_[V0, V1]
+    caps = np.r_[T, T[:, ::-1] + k]
+    sides = np.concatenate([[[i, (i + 1) % k, k + (i + 1) % k], [i, k + (i + 1) % k, k + i]]
+                            for i in range(k)])
+    Fm = np.r_[caps, sides]
+    mesh = trimesh.Trimesh(Vm, Fm, process=True)
+    trimesh.repair.fix_normals(mesh)
+    V, F = _merged(*trimesh.remesh.subdivide_to_size(mesh.vertices, mesh.faces, 0.1))
+    for center, n in (((1.0, 1.0, 1.0), 1), ((1.0, 0.0, 1.0), 3)):
+        res = inpaint(V, F, ("sphere", center, 0.35))
+        assert res.n_filled == 1 and res.holes[0].n_creases == n, res.summary()
+        ang, ids, _ = _crease_dihedrals(res)
+        assert np.abs(ang[ids] - 90.0).max() < 5.0
+        assert _normal_deviation_box(res).max() < 1.0
