@@ -199,3 +199,29 @@ def test_every_fill_option_is_validated(kw, name):
         fill_holes(V, F, keep_border=True, **kw)
     with pytest.raises(MeshRepairError, match=rf"^{name} must be"):
         inpaint(V, F, ("sphere", (2.0, 2.0, 0.0), 1.0), **kw)
+
+
+def test_intersecting_faired_patch_keeps_half_the_fairing_before_the_membrane(monkeypatch):
+    """When the faired patch is reported intersecting, half of the fairing is tried before the
+    membrane (the intersection test is forced for the fully faired position only)."""
+    import meshrepair.fill as fill_mod
+
+    V, F = grid(15, z=lambda x, y: 0.02 * (x - 7) ** 2 + 0.01 * (y - 7) ** 2)
+    V, F = _punch(V, F, [(7, 7)], 2.5)
+    faired = fill_holes(V, F, keep_border=True, refine=False)
+    flat = fill_holes(V, F, keep_border=True, refine=False, initial="harmonic")
+    real = fill_mod._intersecting
+    state = {"first": True}
+
+    def fake(V1, F1, faces, ignore=None, pairs=None):
+        if state["first"] and pairs is not None and len(faces) == len(faired.new_faces):
+            state["first"] = False
+            return 1
+        return real(V1, F1, faces, ignore, pairs)
+
+    monkeypatch.setattr(fill_mod, "_intersecting", fake)
+    half = fill_holes(V, F, keep_border=True, refine=False)
+    h = [r for r in half.holes if r.status == "filled"][0]
+    assert "0.5 faired" in h.reason
+    nv = half.new_vertices
+    assert np.allclose(half.V[nv], 0.5 * (faired.V[nv] + flat.V[nv]))

@@ -237,6 +237,10 @@ def _intersecting(V: np.ndarray, F: np.ndarray, faces: np.ndarray,
     return len(pairs)
 
 
+BLEND_STEPS = (0.5, 0.25)
+"""When the faired patch intersects the surround, these fractions of the fairing (from the
+initial surface) are tried before the initial surface itself."""
+
 SEAM_RETRY_FACTOR = 1.5
 SEAM_RETRY_MARGIN = 3.0
 """A planar patch whose mean dihedral angle across its loop exceeds
@@ -372,14 +376,26 @@ def _fill_core(V: np.ndarray, F: np.ndarray, holes, skip: dict[int, str], *, den
                 rep = by_rep[i]
                 n_x = _intersecting(V1, F1, bf, dropped, pairs=pairs0)
                 if n_x and initial == "bilaplacian":
+                    # keep as much of the fairing as stays clear of the surround: the patch
+                    # moved back towards its initial surface by halves, then the initial one
                     unfaired = "unfaired" if method[i] == "liepa" else "membrane"
-                    log.info("hole %d: the faired patch intersects the mesh; using the %s", i,
-                             "unfaired surface" if unfaired == "unfaired" else "membrane")
+                    Vf = V1[bv].copy()
                     V1 = V1.copy()
-                    V1[bv] = Vm[bv]
-                    n_x = _intersecting(V1, F1, bf, dropped)
-                    if not n_x:
-                        rep.reason += f", {unfaired}"
+                    for frac in BLEND_STEPS:
+                        V1[bv] = Vm[bv] + frac * (Vf - Vm[bv])
+                        n_x = _intersecting(V1, F1, bf, dropped)
+                        if not n_x:
+                            log.info("hole %d: the faired patch intersects the mesh; kept %g of "
+                                     "the fairing", i, frac)
+                            rep.reason += f", {frac:g} faired"
+                            break
+                    if n_x:
+                        log.info("hole %d: the faired patch intersects the mesh; using the %s",
+                                 i, "unfaired surface" if unfaired == "unfaired" else "membrane")
+                        V1[bv] = Vm[bv]
+                        n_x = _intersecting(V1, F1, bf, dropped)
+                        if not n_x:
+                            rep.reason += f", {unfaired}"
                 if not n_x:
                     # choose by measurement: a planar patch meeting its surround at a kink is
                     # tried again with Liepa's triangulation, and the smoother seam is kept
