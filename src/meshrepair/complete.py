@@ -56,8 +56,17 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
-import scipy.sparse as sp
 
+from .complete_input import (  # noqa: F401  (re-exported: the public API of this module)
+    _check_template,
+    _compact,
+    _face_selection,
+    _region_loop,
+    _template_arrays,
+    extract_patch,
+    load_transform,
+    region_from_vertices,
+)
 from .correspondence import (
     align_loops,
     apply_transform,
@@ -73,7 +82,8 @@ from .correspondence import (
 from .errors import MeshRepairError
 from .geometry import face_normals, sharp_edge_mask
 from .solver import ADMMSolver, SolverOptions, Stage
-from .topology import boundary_loops, edge_topology, vertex_adjacency
+from .stitch import _harmonic_displacement, _rings, _split_ears, _to_loop_params  # noqa: F401
+from .topology import boundary_loops, edge_topology
 
 log = logging.getLogger(__name__)
 
@@ -146,342 +156,6 @@ class CompletionResult:
         import trimesh
 
         return trimesh.Trimesh(self.V, self.F, process=False)
-
-
-# ------------------------------------------------------------------------------------------------
-# inputs
-# ------------------------------------------------------------------------------------------------
-
-def _face_selection(sel, n_faces: int, what: str) -> np.ndarray:
-    """Face indices (sorted, unique) from an index list or a boolean mask of length nF."""
-    arr = np.asarray(sel)
-    if arr.dtype == bool:
-        if arr.shape != (n_faces,):
-            raise MeshRepairError(f"{what}: a boolean face mask must have length {n_faces} (one "
-                                  f"value per face), got shape {arr.shape}")
-        return np.flatnonzero(arr).astype(np.int64)
-    arr = arr.ravel()
-    if arr.size and not (np.issubdtype(arr.dtype, np.integer)
-                         or (np.issubdtype(arr.dtype, np.floating)
-                             and np.all(np.isfinite(arr)) and np.all(arr == np.round(arr)))):
-        raise MeshRepairError(f"{what}: expected integer face indices or a boolean face mask, "
-                              f"got dtype {arr.dtype}")
-    idx = arr.astype(np.int64)
-    bad = (idx < 0) | (idx >= n_faces)
-    if bad.any():
-        raise MeshRepairError(f"{what}: {int(bad.sum())} face indices out of range "
-                              f"[0, {n_faces - 1}] (e.g. {idx[bad][:5].tolist()})")
-    return np.unique(idx)
-
-
-def region_from_vertices(F: np.ndarray, vertices, n_vertices: int | None = None) -> np.ndarray:
-    """Faces whose three vertices are all selected.
-
-    Parameters
-    ----------
-    F : (nF, 3) int
-    vertices : vertex indices, or a boolean / 0-1 mask of length ``n_vertices``, or a mask file
-        (see :func:`meshrepair.io.read_vertex_mask`)
-    n_vertices : int, optional (default ``F.max() + 1``)
-
-    Returns
-    -------
-    (k,) int64 face indices
-    """
-    from .io import read_vertex_mask
-
-    F = np.asarray(F, dtype=np.int64)
-    nV = int(F.max()) + 1 if n_vertices is None else int(n_vertices)
-    mask = read_vertex_mask(vertices, nV)
-    faces = np.flatnonzero(mask[F].all(axis=1)).astype(np.int64)
-    if faces.size == 0:
-        raise MeshRepairError(f"the vertex selection ({int(mask.sum())} vertices) contains no "
-                              "face with all three vertices selected; select a connected patch "
-                              "of vertices (the region is made of the faces they cover)")
-    return faces
-
-
-def extract_patch(V, F, faces) -> tuple[np.ndarray, np.ndarray]:
-    """The sub-mesh made of some faces, with unreferenced vertices dropped.
-
-    Parameters
-    ----------
-    V : (nV, 3) float
-    F : (nF, 3) int
-    faces : face indices or boolean face mask
-
-    Returns
-    -------
-    V_P : (m, 3) float64, the used vertices in their original order
-    F_P : (k, 3) int64
-    """
-    from .io import as_arrays
-
-    V, F = as_arrays(V, F)
-    idx = _face_selection(faces, len(F), "patch selection")
-    if idx.size == 0:
-        raise MeshRepairError("the patch selection is empty; select the template's faces")
-    return _compact(V, F[idx])
-
-
-def _compact(V: np.ndarray, F: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    used = np.zeros(len(V), bool)
-    used[F.ravel()] = True
-    new = np.cumsum(used) - 1
-    return V[used].copy(), new[F].astype(np.int64)
-
-
-def load_transform(path_or_array) -> np.ndarray:
-    """A 4x4 transform from an array or a text file of 16 numbers (row-major).
-
-    A 3x4 matrix (12 numbers) is accepted too (last row ``0 0 0 1``).
-
-    Returns
-    -------
-    (4, 4) float64
-    """
-    import os
-
-    if isinstance(path_or_array, (str, os.PathLike)):
-        try:
-            with open(path_or_array, encoding="utf-8") as fh:
-                text = fh.read()
-        except OSError as exc:
-            raise MeshRepairError(f"cannot read transform file {str(path_or_array)!r}: "
-                                  f"{exc.strerror or exc}") from None
-        toks = text.replace(",", " ").replace("[", " ").replace("]", " ").split()
-        try:
-            vals = np.array([float(t) for t in toks])
-        except ValueError:
-            raise MeshRepairError(f"transform file {str(path_or_array)!r} must hold 16 numbers "
-                                  "(a 4x4 matrix, row by row)") from None
-    else:
-        vals = np.asarray(path_or_array, dtype=np.float64).ravel()
-    if vals.size == 12:
-        vals = np.concatenate([vals, [0.0, 0.0, 0.0, 1.0]])
-    if vals.size != 16 or not np.isfinite(vals).all():
-        raise MeshRepairError(f"a transform must be 16 finite numbers (a 4x4 matrix), got "
-                              f"{vals.size} values")
-    T = vals.reshape(4, 4)
-    if not np.allclose(T[3], [0, 0, 0, 1]):
-        raise MeshRepairError(f"the last row of the transform must be 0 0 0 1 (an affine map), "
-                              f"got {T[3].tolist()}")
-    if abs(np.linalg.det(T[:3, :3])) < 1e-12:
-        raise MeshRepairError("the transform's 3x3 part is singular; give an invertible "
-                              "rigid/similarity transform")
-    return T
-
-
-def _template_arrays(template) -> tuple[np.ndarray, np.ndarray]:
-    from .io import as_arrays
-
-    if template is None:
-        raise MeshRepairError("a template patch is required: pass (V_P, F_P), a trimesh.Trimesh, "
-                              "or (V, F, face_indices) selecting faces of a mesh")
-    if isinstance(template, (tuple, list)) and len(template) == 3:
-        Vs, Fs = as_arrays(template[0], template[1])
-        idx = _face_selection(template[2], len(Fs), "template face selection")
-        if idx.size == 0:
-            raise MeshRepairError("the template face selection is empty")
-        return _compact(Vs, Fs[idx])
-    if isinstance(template, (tuple, list)) and len(template) == 2:
-        VP, FP = as_arrays(template[0], template[1])
-    else:
-        VP, FP = as_arrays(template)
-    if FP.ndim == 2 and FP.shape[0] and FP.shape[1] == 3 and FP.min() >= 0 and FP.max() < len(VP):
-        return _compact(VP, FP)
-    return VP, FP  # check_mesh explains what is wrong
-
-
-def _check_template(VP: np.ndarray, FP: np.ndarray) -> np.ndarray:
-    """Validate the template and return its boundary loop."""
-    from .validate import check_mesh
-
-    rep = check_mesh(VP, FP, name="template")
-    if rep.n_degenerate_faces:
-        raise MeshRepairError(
-            f"stitching the template into the hole gives {rep.n_degenerate_faces} zero-area "
-            "faces (template faces whose corners land on collinear seam vertices); subdivide the "
-            "template near its boundary, or choose a slightly different region")
-    if rep.n_pinched_vertices:
-        raise MeshRepairError(f"template: {rep.n_pinched_vertices} non-manifold (pinched) "
-                              "vertices; the template must be a manifold patch: split or clean "
-                              "those vertices")
-    if rep.n_components != 1:
-        raise MeshRepairError(f"template: {rep.n_components} connected components; the template "
-                              "must be one connected patch (keep the component you want)")
-    loops = boundary_loops(FP, len(VP))
-    if len(loops) == 0:
-        raise MeshRepairError("template: it is closed (no boundary loop); the template must be a "
-                              "patch with exactly one boundary loop: cut the part you need")
-    if len(loops) > 1:
-        raise MeshRepairError(f"template: {len(loops)} boundary loops (sizes "
-                              f"{[len(x) for x in loops][:6]}); the template must have exactly "
-                              "one boundary loop: fill its other holes or cut a disc-like part")
-    return loops[0]
-
-
-def _region_loop(V: np.ndarray, F: np.ndarray, faces: np.ndarray
-                 ) -> tuple[np.ndarray, np.ndarray]:
-    """Check the region is a disc; return ``b0`` (remaining orientation) and the removed mask."""
-    from scipy.sparse.csgraph import connected_components
-
-    nV, nF = len(V), len(F)
-    if faces.size == 0:
-        raise MeshRepairError("the region is empty; give the faces to replace, or hole=k to "
-                              "complete an existing hole")
-    if faces.size == nF:
-        raise MeshRepairError("the region covers the whole mesh; nothing would be left to "
-                              "attach the template to: select a smaller region")
-    inreg = np.zeros(nF, bool)
-    inreg[faces] = True
-    topo = edge_topology(F, nV)
-    f0, f1 = topo.edge_faces[:, 0], topo.edge_faces[:, 1]
-    in0 = inreg[f0]
-    in1 = np.where(f1 >= 0, inreg[np.maximum(f1, 0)], False)
-    touch = (f1 < 0) & in0
-    if touch.any():
-        e = topo.edges[np.flatnonzero(touch)[0]]
-        raise MeshRepairError(f"the region touches the mesh boundary ({int(touch.sum())} boundary "
-                              f"edges, e.g. {e.tolist()}); the region must be surrounded by "
-                              "remaining faces: shrink it, or fill the hole first")
-    both = np.flatnonzero(in0 & in1)
-    pos = -np.ones(nF, np.int64)
-    pos[faces] = np.arange(faces.size)
-    A = sp.coo_matrix((np.ones(both.size), (pos[f0[both]], pos[f1[both]])),
-                      shape=(faces.size, faces.size))
-    ncomp, lab = connected_components(A, directed=False)
-    if ncomp > 1:
-        sizes = np.sort(np.bincount(lab))[::-1]
-        raise MeshRepairError(f"the region is not connected: {ncomp} edge-connected parts "
-                              f"(sizes {sizes[:6].tolist()} faces); replace one part at a time")
-    loops = boundary_loops(F[faces], nV)
-    if len(loops) != 1:
-        raise MeshRepairError(f"the region is not a disc: its boundary has {len(loops)} loops "
-                              f"(sizes {[len(x) for x in loops][:6]}); select a region without "
-                              "holes or handles (e.g. add the enclosed faces)")
-    loop = loops[0]
-    if len(np.unique(loop)) != len(loop):
-        raise MeshRepairError("the region's boundary touches itself at a vertex (it is not a "
-                              "simple loop); grow or shrink the region so its border is simple")
-    vr = np.unique(F[faces])
-    n_edges = int((in0 | in1).sum())
-    chi = vr.size - n_edges + faces.size
-    if chi != 1:
-        raise MeshRepairError(f"the region is not a disc (Euler characteristic {chi}, a disc has "
-                              "1): it contains a handle; select a smaller region")
-    removed = np.zeros(nV, bool)
-    removed[vr] = True
-    removed[loop] = False
-    if removed[F[~inreg]].any():
-        raise MeshRepairError("the region's interior vertices are shared with remaining faces "
-                              "(a pinched vertex); select a region whose border is simple")
-    return loop[::-1].copy(), removed
-
-
-def _to_loop_params(params_seq: list[np.ndarray], reversed_seq: bool) -> list[np.ndarray]:
-    """Convert split fractions given along a sequence to the loop's own edge order."""
-    if not reversed_seq:
-        return params_seq
-    n = len(params_seq)
-    out: list[np.ndarray] = [np.zeros(0)] * n
-    for i, t in enumerate(params_seq):
-        # sequence = loop[::-1]: its edge i is loop edge (n - 2 - i) % n traversed backwards
-        out[(n - 2 - i) % n] = np.sort(1.0 - np.asarray(t))
-    return out
-
-
-def _rings(topo, seeds: np.ndarray, max_ring: int) -> np.ndarray:
-    """Edge-ring distance of every vertex to ``seeds`` (``max_ring + 1`` beyond ``max_ring``)."""
-    nV = topo.n_vertices
-    A = vertex_adjacency(topo.edges, nV)
-    dist = np.full(nV, max_ring + 1, dtype=np.int64)
-    dist[seeds] = 0
-    front = np.zeros(nV)
-    front[seeds] = 1.0
-    for r in range(1, max_ring + 1):
-        reach = (A @ front > 0) & (dist > max_ring)
-        dist[reach] = r
-        front = reach.astype(np.float64)
-    return dist
-
-
-def _split_ears(V: np.ndarray, F: np.ndarray, loop: np.ndarray
-                ) -> tuple[np.ndarray, np.ndarray, int]:
-    """Split the inner edge of every face that owns two edges of the boundary ``loop``.
-
-    Such an *ear* would become a zero-area face if its three boundary vertices were merged into
-    three collinear seam vertices (which happens when ``b0``'s edges are subdivided). The inner
-    edge ``(a, b)`` is split at its midpoint ``m`` and both faces containing it are split in two
-    (``(a, b, c) -> (a, m, c), (m, b, c)``), which keeps the surface and the orientation.
-
-    Returns
-    -------
-    V2, F2 : the patch with the new vertices appended
-    n_split : number of ears split
-    """
-    n = len(loop)
-    bedges = {(int(loop[i]), int(loop[(i + 1) % n])) for i in range(n)}
-    Fl = F.tolist()
-    he_face = {}
-    for fi, (a, b, c) in enumerate(Fl):
-        he_face[(a, b)] = fi
-        he_face[(b, c)] = fi
-        he_face[(c, a)] = fi
-    ears = [fi for fi, (a, b, c) in enumerate(Fl)
-            if ((a, b) in bedges) + ((b, c) in bedges) + ((c, a) in bedges) == 2]
-    if not ears:
-        return V, F, 0
-    Vl = [V]
-    nxt = len(V)
-    for fi in ears:
-        a, b, c = Fl[fi]
-        he = [(a, b), (b, c), (c, a)]
-        u, v = next(h for h in he if h not in bedges)  # the inner edge
-        m = nxt
-        nxt += 1
-        Vl.append(0.5 * (V[u] + V[v])[None, :])
-        for x, y in ((u, v), (v, u)):  # both faces on the edge
-            fj = he_face.pop((x, y), None)
-            if fj is None:
-                continue
-            f = Fl[fj]
-            k = f.index(x)
-            z = f[(k + 2) % 3]
-            Fl[fj] = [x, m, z]
-            Fl.append([m, y, z])
-            fn = len(Fl) - 1
-            he_face[(x, m)] = fj
-            he_face[(m, z)] = fj
-            he_face[(m, y)] = fn
-            he_face[(y, z)] = fn
-            he_face[(z, x)] = fj
-    return np.vstack(Vl), np.asarray(Fl, dtype=np.int64), len(ears)
-
-
-def _harmonic_displacement(V: np.ndarray, F: np.ndarray, loop: np.ndarray, disp: np.ndarray,
-                           rings: int) -> np.ndarray:
-    """Spread a displacement of the boundary ``loop`` over ``rings`` rings of a patch.
-
-    The displacement is ``disp`` on the loop, 0 on the vertices more than ``rings`` rings away,
-    and harmonic (uniform graph Laplacian) in between. Returns ``(nV, 3)``.
-    """
-    from scipy.sparse.linalg import spsolve
-
-    topo = edge_topology(F, len(V))
-    dist = _rings(topo, loop, rings + 1)
-    D = np.zeros((len(V), 3))
-    D[loop] = disp
-    inner = np.flatnonzero((dist >= 1) & (dist <= rings))
-    if inner.size == 0 or rings < 1:
-        return D
-    Adj = vertex_adjacency(topo.edges, len(V)).tocsr()
-    deg = np.asarray(Adj.sum(axis=1)).ravel()
-    L = (sp.diags(deg) - Adj).tocsr()
-    L_ii = L[inner][:, inner].tocsc()
-    rhs = -(L[inner] @ D)
-    D[inner] = np.asarray(spsolve(L_ii, rhs)).reshape(-1, 3)
-    return D
 
 
 # ------------------------------------------------------------------------------------------------
@@ -894,3 +568,4 @@ def complete(
         stop_reason=stop,
         params=params,
     )
+
