@@ -57,33 +57,24 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .alignment import ICP_MODES, alignment_report, place_template
 from .complete_input import (  # noqa: F401  (re-exported: the public API of this module)
     _check_template,
     _compact,
     _face_selection,
     _region_loop,
     _template_arrays,
+    _template_context,
     extract_patch,
     load_transform,
     region_from_vertices,
 )
-from .correspondence import (
-    align_loops,
-    apply_transform,
-    arc_length_parameters,
-    best_cyclic_alignment,
-    icp_loop_to_polyline,
-    icp_to_surface,
-    monotone_loop_match,
-    resample_polyline,
-    split_boundary_edges,
-    umeyama,
-)
+from .correspondence import align_loops, apply_transform, monotone_loop_match, split_boundary_edges
 from .errors import MeshRepairError
-from .geometry import face_normals, sharp_edge_mask
+from .geometry import face_normals, mean_edge_length, sharp_edge_mask, vertex_normals
 from .solver import ADMMSolver, SolverOptions, Stage
 from .stitch import _harmonic_displacement, _rings, _split_ears, _to_loop_params  # noqa: F401
-from .topology import boundary_loops, edge_topology
+from .topology import boundary_loops, edge_topology, vertex_adjacency
 
 log = logging.getLogger(__name__)
 
@@ -92,7 +83,8 @@ __all__ = ["MODES", "CompletionResult", "complete", "extract_patch", "load_trans
 
 MODES = ("smooth", "sharp", "adaptive")
 ORIENTATIONS = ("template", "auto")
-ICP_MODES = ("auto", "surface", "boundary", "none")
+#: seam gap (mean edge lengths) at which the strip becomes fully free (see _strip_fidelity)
+GAP_FREE = 0.25
 _EDGE_FORCE = {"smooth": 0, "sharp": 1, "adaptive": -1}
 
 
@@ -130,6 +122,14 @@ class CompletionResult:
     iterations : int
     stop_reason : str
     params : dict, the options used
+    alignment : dict, the alignment report (:func:`meshrepair.alignment.alignment_report`):
+        ``boundary_rms``, ``boundary_max``, ``context_rms``, ``context_max`` in mean edge
+        lengths of the input (context values None for a template without context),
+        ``context_points``, ``unit``, ``warning``
+    symmetry : dict or None, with ``template="mirror"``: the plane (``normal``, ``point``,
+        ``offset``), ``residual`` (mean distance of the mirrored intact surface to itself, in
+        mean edge lengths), ``residual_max``, ``candidates`` and the counterpart's face count
+        (see :func:`meshrepair.symmetry.detect_symmetry`)
     """
 
     V: np.ndarray
@@ -149,6 +149,8 @@ class CompletionResult:
     iterations: int = 0
     stop_reason: str = ""
     params: dict = field(default_factory=dict)
+    alignment: dict = field(default_factory=dict)
+    symmetry: dict | None = None
 
     @property
     def mesh(self):
@@ -156,6 +158,31 @@ class CompletionResult:
         import trimesh
 
         return trimesh.Trimesh(self.V, self.F, process=False)
+
+
+def _strip_fidelity(topo, seam: np.ndarray, gap_l: np.ndarray, strip: np.ndarray,
+                    strip_rings: int, weight: float) -> np.ndarray:
+    """Fidelity mask ``M_V``: 1 outside the strip; on it ``weight * max(0, 1 - g / tau)``.
+
+    ``g`` is the largest normal seam gap (mean edge lengths, before the harmonic spreading; the
+    gap's component along the remaining surface's vertex normal at ``b0``) among the
+    seam vertices within ``strip_rings`` rings, ``tau = GAP_FREE`` mean edge lengths: where the
+    template already meets the mesh the stitched surface is kept close to ``V^(0)``, where the
+    seam is open the strip is free (the paper's ``M_V = 0``).
+    """
+    nV = topo.n_vertices
+    M_V = np.ones(nV)
+    if weight <= 0:
+        M_V[strip] = 0.0
+        return M_V
+    A = vertex_adjacency(topo.edges, nV).tocsr()
+    g = np.zeros(nV)
+    g[seam] = gap_l
+    for _ in range(int(strip_rings)):
+        nb = A.multiply(g[None, :]).max(axis=1).toarray().ravel()
+        g = np.maximum(g, nb)
+    M_V[strip] = weight * np.clip(1.0 - g[strip] / GAP_FREE, 0.0, 1.0)
+    return M_V
 
 
 # ------------------------------------------------------------------------------------------------
@@ -178,6 +205,8 @@ def complete(
     orientation: str = "template",
     icp: str | bool = "auto",
     icp_rings: int = 2,
+    strip_fidelity: float | None = None,
+    max_symmetry_residual: float = 0.1,
     fix_outside: bool | None = None,
     denoise: bool = False,
     lam: float | None = None,
@@ -288,6 +317,15 @@ def complete(
         raise MeshRepairError(f"icp must be one of {ICP_MODES} (or a bool), got {icp!r}")
     if int(icp_rings) != icp_rings or icp_rings < 0:
         raise MeshRepairError(f"icp_rings must be an integer >= 0, got {icp_rings}")
+    if strip_fidelity is None:
+        strip_fidelity = 16.0 if mode == "adaptive" else 0.0
+    if not (np.isfinite(strip_fidelity) and strip_fidelity >= 0):
+        raise MeshRepairError(f"strip_fidelity must be a finite number >= 0, got "
+                              f"{strip_fidelity}")
+    strip_fidelity = float(strip_fidelity)
+    if not (np.isfinite(max_symmetry_residual) and max_symmetry_residual > 0):
+        raise MeshRepairError(f"max_symmetry_residual must be a number > 0 (mean edge lengths), "
+                              f"got {max_symmetry_residual}")
 
     # ---- inputs -------------------------------------------------------------------------------
     V, F = as_arrays(V, F)
@@ -318,94 +356,37 @@ def complete(
             region_faces = region_from_vertices(F, region_vertices, nV)
         b0, removed = _region_loop(V, F, region_faces)
 
-    icp_mode = icp if icp != "auto" else ("surface" if region_faces.size else "boundary")
+    icp_mode = "context" if icp == "auto" else icp
+    sym_info = None
+    if isinstance(template, str) and template == "mirror":
+        from .symmetry import mirror_template
+
+        template, sym_info = mirror_template(V, F, region_faces, b0,
+                                             max_residual=max_symmetry_residual)
+    elif isinstance(template, str):
+        raise MeshRepairError(f"template must be a patch, a face selection of a mesh, or "
+                              f"'mirror', got the string {template!r}")
     VP, FP = _template_arrays(template)
     bP = _check_template(VP, FP)
+    context = _template_context(template, icp_rings) if icp_mode == "context" else None
     T_user = None if transform is None else load_transform(transform)
 
-    # ---- sizes --------------------------------------------------------------------------------
+    # ---- placement (alignment.py) ---------------------------------------------------------------
+    pl = place_template(V, F, b0, region_faces, VP, FP, bP, context=context, transform=T_user,
+                        allow_scale=allow_scale, max_size_ratio=max_size_ratio,
+                        orientation=orientation, icp=icp_mode, icp_rings=icp_rings)
+    T, ca, icp_info = pl.T, pl.cyclic, pl.icp
+    unit = mean_edge_length(V, F)
+    report = alignment_report(V, F, b0, VP, bP, T, context=context, target=pl.context_target,
+                              unit=unit)
     A = V[b0]
-    B_raw = VP[bP]
-    B = B_raw if T_user is None else apply_transform(T_user, B_raw)
-    L0 = arc_length_parameters(A)[1]
-    LP = arc_length_parameters(B)[1]
-    ratio = LP / L0
-    if not allow_scale and not (1.0 / max_size_ratio <= ratio <= max_size_ratio):
-        raise MeshRepairError(
-            f"the template's boundary is {ratio:.3g} times as long as the hole's ({LP:.4g} vs "
-            f"{L0:.4g}), beyond the allowed factor {max_size_ratio:g}: use a template of the "
-            "hole's size, pass allow_scale=True to fit a uniform scale, or give a transform")
-    if not allow_scale and T_user is None and not (2 / 3 <= ratio <= 1.5):
-        log.warning("the template's boundary is %.3g times as long as the hole's and the "
-                    "alignment is rigid; pass allow_scale=True to fit a uniform scale", ratio)
-
-    # ---- coarse correspondence and alignment ----------------------------------------------------
-    nA, nB = len(A), len(B)
-    m = int(np.clip(max(nA, nB), 32, 1024))
-    Ar = resample_polyline(A, m)
-    Br = resample_polyline(B, m)
-    fit = "none" if T_user is not None else ("similarity" if allow_scale else "rigid")
-    cand = {rev: best_cyclic_alignment(Ar, Br, fit=fit, directions=(rev,))
-            for rev in (True, False)}
-    if orientation == "template":
-        ca = cand[True]
-        other = cand[False].rms
-        radius = L0 / (2 * np.pi)
-        if ca.rms > 0.02 * radius and other < 0.5 * ca.rms:
-            raise MeshRepairError(
-                f"the template's boundary matches the hole much better with the opposite "
-                f"orientation (RMS {other:.3g} vs {ca.rms:.3g}): its faces seem inversely "
-                "oriented (a mirrored template?). Flip them (F_P[:, ::-1]) or pass "
-                "orientation='auto'")
-    else:
-        ca = min(cand.values(), key=lambda c: c.rms)
-        other = cand[not ca.reversed].rms
-    idx = ca.indices(m)
-    rms_before = float(np.sqrt(np.mean(np.sum((Ar - resample_polyline(B_raw, m)[idx]) ** 2,
-                                              axis=1))))
-    icp_info = None
-    if T_user is not None:
-        T = T_user
-    else:
-        T = ca.transform
-        if icp_mode in ("boundary", "surface"):
-            dT, r0, r1 = icp_loop_to_polyline(apply_transform(T, Br), A, scale=allow_scale)
-            icp_info = {"target": "boundary", "rms_before": r0, "rms_after": r1}
-            T = dT @ T
-    log.info("completion: hole loop %d vertices, template loop %d, %s fit, coarse RMS %.3g "
-             "(other direction %.3g)", nA, nB, fit, ca.rms, other)
+    nA, nB = len(A), len(bP)
 
     # ---- suitable subdivision -------------------------------------------------------------------
     rev = ca.reversed
     flipped = not rev
     Fm = F[np.setdiff1d(np.arange(nF), region_faces)] if region_faces.size else F.copy()
     bseq = bP[::-1] if rev else bP
-
-    def pair_match(T_: np.ndarray):
-        Bt = apply_transform(T_, VP[bseq])
-        if nA <= nB:
-            jj, r = monotone_loop_match(A, Bt)
-            return r, VP[bseq][jj], A
-        jj, r = monotone_loop_match(Bt, A)
-        return r, VP[bseq], A[jj]
-
-    if icp_mode != "none" and T_user is None:  # refit on matched vertex pairs while it helps
-        pair_rms, src, dst = pair_match(T)
-        for _ in range(3):
-            T2 = umeyama(src, dst, scale=allow_scale)
-            r2, s2, d2 = pair_match(T2)
-            if not r2 < pair_rms * (1 - 1e-6):
-                break
-            T, pair_rms, src, dst = T2, r2, s2, d2
-    if icp_mode == "surface" and T_user is None:
-        ring = _rings(edge_topology(FP, len(VP)), bP, icp_rings) <= icp_rings
-        d_in = _rings(edge_topology(F, nV), b0, 3)
-        tsel = d_in[F].min(axis=1) <= 3
-        tsel[region_faces] = True
-        dT, r0, r1 = icp_to_surface(apply_transform(T, VP[ring]), V, F[tsel], scale=allow_scale)
-        icp_info = {"target": "surface", "boundary": icp_info, "rms_before": r0,
-                    "rms_after": r1, "points": int(ring.sum()), "target_faces": int(tsel.sum())}
-        T = dT @ T
     VPt = apply_transform(T, VP)
     la = align_loops(A, VPt[bseq])
     Vm, Fm, b0_2, new = split_boundary_edges(V, Fm, b0, la.params_A)
@@ -466,7 +447,11 @@ def complete(
     topo = edge_topology(F_star, nVs)
     dist = _rings(topo, seam, strip_rings + 2)
     strip = dist <= strip_rings
-    M_V = np.where(strip, 0.0, 1.0)
+    # the seam's step across the surface: the gap along the remaining surface's normal at b0
+    # (a tangential gap, e.g. two tessellations of one surface, needs no blending)
+    n_seam = vertex_normals(Vm, Fm)[b0_2]
+    gap_l = np.abs(np.einsum("ij,ij->i", gap, n_seam)) / unit
+    M_V = _strip_fidelity(topo, seam, gap_l, strip, strip_rings, strip_fidelity)
     fixed = ~strip if fix_outside else np.zeros(nVs, bool)
 
     def force_for(edges: np.ndarray, d: np.ndarray) -> np.ndarray:
@@ -533,22 +518,23 @@ def complete(
         "inserted_region": int(ins_region),
         "inserted_template": int(ins_template),
         "transform": T.copy(),
-        "fit": "user" if T_user is not None else fit,
-        "rms_before": rms_before,
+        "fit": pl.fit,
+        "rms_before": pl.rms_before,
         "rms_coarse": float(ca.rms),
-        "rms_other_direction": float(other),
+        "rms_other_direction": pl.rms_other_direction,
         "icp": icp_info,
         "rms_after": float(rms_after),
         "max_gap": max_gap,
         "ears_split": int(n_ears),
-        "size_ratio": float(ratio),
+        "size_ratio": pl.size_ratio,
     }
     params = {"strip_rings": strip_rings, "mode": mode, "allow_scale": allow_scale,
               "max_size_ratio": max_size_ratio, "orientation": orientation, "icp": icp_mode,
               "fix_outside": bool(fix_outside), "denoise": denoise, "lam": lam_used, "th": th,
               "a": a, "iterations": int(iterations), "mask_update_every": mask_update_every,
               "relax": float(relax), "tol": tol, "inner_solver": inner_solver,
-              "hole": None if hole is None else int(hole)}
+              "hole": None if hole is None else int(hole), "strip_fidelity": strip_fidelity,
+              "template": "mirror" if sym_info is not None else "given"}
     return CompletionResult(
         V=V_out,
         F=F_star,
@@ -567,5 +553,7 @@ def complete(
         iterations=n_it,
         stop_reason=stop,
         params=params,
+        alignment=report,
+        symmetry=sym_info,
     )
 

@@ -160,6 +160,33 @@ def _template_arrays(template) -> tuple[np.ndarray, np.ndarray]:
     return VP, FP  # check_mesh explains what is wrong
 
 
+def _template_context(template, rings: int) -> np.ndarray | None:
+    """Positions of the source mesh's vertices within ``rings`` edge rings outside a template.
+
+    Only a template given as ``(V_src, F_src, faces)`` (a piece of a mesh) has a context: the
+    intact surface around it, which the alignment matches with the surface around the hole.
+    Returns ``(k, 3)`` float64, or None (a bare patch, or no vertex around it).
+    """
+    from .io import as_arrays
+    from .topology import vertex_adjacency
+
+    if not (isinstance(template, (tuple, list)) and len(template) == 3) or rings < 1:
+        return None
+    Vs, Fs = as_arrays(template[0], template[1])
+    idx = _face_selection(template[2], len(Fs), "template face selection")
+    inside = np.zeros(len(Vs), bool)
+    inside[Fs[idx].ravel()] = True
+    A = vertex_adjacency(edge_topology(Fs, len(Vs)).edges, len(Vs))
+    reached = inside.copy()
+    front = inside.astype(np.float64)
+    for _ in range(int(rings)):
+        new = (A @ front > 0) & ~reached
+        reached |= new
+        front = new.astype(np.float64)
+    ctx = np.flatnonzero(reached & ~inside)
+    return Vs[ctx].copy() if ctx.size else None
+
+
 def _check_template(VP: np.ndarray, FP: np.ndarray) -> np.ndarray:
     """Validate the template and return its boundary loop."""
     from .validate import check_mesh
