@@ -129,12 +129,15 @@ def detect_symmetry(V, F, exclude_faces=None, *, loop=None, samples: int = 3000,
     if ex.any():  # the whole mesh's frame too: the region breaks the intact part's symmetry
         cm2, axes2 = _principal_frame(V, F)
         starts += [(a, cm2) for a in axes2]
+    first = [residual(n0, c0) for n0, c0 in starts]
+    order = np.argsort([d.mean() for d, _ in first])  # refine the most promising first
     results = []
-    for n0, c0 in starts:
+    for k in order:
         if results and min(t[0] for t in results) < 1e-3:
             break  # an exact symmetry was found
+        n0, c0 = starts[k]
         n, p = n0.copy(), c0.copy()
-        d, keep = residual(n, p)
+        d, keep = first[k]
         best = (float(d.mean()), n, p, d)
         for _ in range(int(iterations)):
             Q = apply_transform(reflection(n, p), X[keep])
