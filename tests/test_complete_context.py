@@ -141,7 +141,7 @@ def test_self_completion_of_damaged_region_is_exact(mesh, request):
     center = 100 if mesh == "ellipsoid" else 2000
     errs = self_completion_errors(V, F, center)
     for (kind, name), (err, res) in errs.items():
-        assert err < 1e-3, (kind, name, err)  # measured <= 3e-4 (ellipsoid), 1e-16 (fandisk)
+        assert err < 1e-3, (kind, name, err)  # measured <= 6.1e-5 (ellipsoid), 2.2e-4 (fandisk)
         a = res.alignment
         assert a["boundary_rms"] < 1e-9 and not a["warning"]
         if name == "piece":  # the template's own context rings were matched to the mesh's
@@ -162,7 +162,7 @@ def test_surface_icp_is_an_opt_in_that_trusts_the_damaged_faces(fandisk):
     tmpl = (apply_transform(random_rigid(3, 2 * diag), VP), FP)
     res = complete(Vd, F, faces, tmpl, icp="surface")
     assert res.correspondence["icp"]["target"] == "surface"
-    assert point_to_surface(res.V, V, F).max() / diag > 1e-3  # measured 8.6e-3 on fandisk
+    assert point_to_surface(res.V, V, F).max() / diag > 1e-3  # measured 8.4e-3
     assert res.alignment["boundary_rms"] > 0.1
     assert complete(Vd, F, faces, tmpl).params["icp"] == "context"
 

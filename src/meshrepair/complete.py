@@ -16,12 +16,14 @@ minimising energy (6) with the shared :class:`~meshrepair.solver.ADMMSolver`:
 2. **Correspondence.** Both loops are resampled to the same number of points by arc length and
    the best cyclic shift and direction is found over all shifts at once
    (:func:`~meshrepair.correspondence.best_cyclic_alignment`).
-3. **Alignment.** Rigid (or, with ``allow_scale=True``, similarity) Umeyama fit of ``b_P`` onto
-   ``b0`` from that correspondence, refined by ICP of ``b_P`` against the polyline ``b0`` and a
-   refit on the matched boundary vertices; when a region of faces is replaced, then by
-   point-to-plane ICP of the template's boundary ring (``icp_rings`` rings) against the surface
-   around the hole (remaining faces near ``b0`` plus the faces ``T̄`` being replaced). Or a
-   user-given 4x4 ``transform`` (no automatic alignment).
+3. **Alignment** (:mod:`meshrepair.alignment`), from the intact surface only: rigid (or, with
+   ``allow_scale=True``, similarity) Umeyama fit of ``b_P`` onto ``b0`` from that
+   correspondence, ICP of ``b_P`` against the polyline ``b0``, refits on matched boundary
+   vertices, and, when the template is a piece of a mesh, point-to-plane ICP of its boundary and
+   its own context rings against the remaining faces around ``b0`` (never the faces ``T̄``
+   being replaced). Or a user-given 4x4 ``transform`` (no automatic alignment). With
+   ``template="mirror"`` the template is the mirrored counterpart of the region across the
+   mesh's symmetry plane (:mod:`meshrepair.symmetry`).
 4. **Suitable subdivision.** The two aligned loops are refined to a common sampling
    (:func:`~meshrepair.correspondence.align_loops`, a cyclic sequence alignment): each vertex
    is either matched with a vertex of the other loop or inserted on the other loop's edge at its
@@ -34,7 +36,10 @@ minimising energy (6) with the shared :class:`~meshrepair.solver.ADMMSolver`:
    split first (they would become zero-area on collinear seam vertices); the template's faces
    are flipped when its loop runs the same way as ``b0`` (only with ``orientation="auto"``).
 6. **Blending.** ``S_D = strip(b0)``: the vertices within ``strip_rings`` edge-rings of the seam
-   on both sides. ``M_V = 0`` on it and 1 elsewhere; ``M_E`` on strip edges is forced smooth
+   on both sides. ``M_V = 1`` outside it; on it 0 (the paper) in smooth and sharp modes, and in
+   adaptive mode ``strip_fidelity * max(0, 1 - g / 0.25)`` with ``g`` the nearby normal seam gap
+   in mean edge lengths (:func:`_strip_fidelity`: where the template meets the mesh the stitched
+   surface is kept); ``M_E`` on strip edges is forced smooth
    (``mode="smooth"``), sharp (``"sharp"``) or left to the dihedral threshold (``"adaptive"``),
    elsewhere the dihedral threshold decides. With ``fix_outside=True`` (default) the vertices
    outside the strip never move, and the solve runs on the band of ``strip_rings + 2`` rings
@@ -58,6 +63,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .alignment import ICP_MODES, alignment_report, place_template
+from .blend import GAP_FREE, _strip_fidelity, blend_seam  # noqa: F401
 from .complete_input import (  # noqa: F401  (re-exported: the public API of this module)
     _check_template,
     _compact,
@@ -71,10 +77,9 @@ from .complete_input import (  # noqa: F401  (re-exported: the public API of thi
 )
 from .correspondence import align_loops, apply_transform, monotone_loop_match, split_boundary_edges
 from .errors import MeshRepairError
-from .geometry import face_normals, mean_edge_length, sharp_edge_mask, vertex_normals
-from .solver import ADMMSolver, SolverOptions, Stage
+from .geometry import mean_edge_length, vertex_normals
 from .stitch import _harmonic_displacement, _rings, _split_ears, _to_loop_params  # noqa: F401
-from .topology import boundary_loops, edge_topology, vertex_adjacency
+from .topology import boundary_loops
 
 log = logging.getLogger(__name__)
 
@@ -83,9 +88,6 @@ __all__ = ["MODES", "CompletionResult", "complete", "extract_patch", "load_trans
 
 MODES = ("smooth", "sharp", "adaptive")
 ORIENTATIONS = ("template", "auto")
-#: seam gap (mean edge lengths) at which the strip becomes fully free (see _strip_fidelity)
-GAP_FREE = 0.25
-_EDGE_FORCE = {"smooth": 0, "sharp": 1, "adaptive": -1}
 
 
 @dataclass
@@ -160,31 +162,6 @@ class CompletionResult:
         return trimesh.Trimesh(self.V, self.F, process=False)
 
 
-def _strip_fidelity(topo, seam: np.ndarray, gap_l: np.ndarray, strip: np.ndarray,
-                    strip_rings: int, weight: float) -> np.ndarray:
-    """Fidelity mask ``M_V``: 1 outside the strip; on it ``weight * max(0, 1 - g / tau)``.
-
-    ``g`` is the largest normal seam gap (mean edge lengths, before the harmonic spreading; the
-    gap's component along the remaining surface's vertex normal at ``b0``) among the
-    seam vertices within ``strip_rings`` rings, ``tau = GAP_FREE`` mean edge lengths: where the
-    template already meets the mesh the stitched surface is kept close to ``V^(0)``, where the
-    seam is open the strip is free (the paper's ``M_V = 0``).
-    """
-    nV = topo.n_vertices
-    M_V = np.ones(nV)
-    if weight <= 0:
-        M_V[strip] = 0.0
-        return M_V
-    A = vertex_adjacency(topo.edges, nV).tocsr()
-    g = np.zeros(nV)
-    g[seam] = gap_l
-    for _ in range(int(strip_rings)):
-        nb = A.multiply(g[None, :]).max(axis=1).toarray().ravel()
-        g = np.maximum(g, nb)
-    M_V[strip] = weight * np.clip(1.0 - g[strip] / GAP_FREE, 0.0, 1.0)
-    return M_V
-
-
 # ------------------------------------------------------------------------------------------------
 # main entry point
 # ------------------------------------------------------------------------------------------------
@@ -228,8 +205,10 @@ def complete(
     region : face indices ``T̄`` to replace (or a boolean face mask of length nF). Give exactly
         one of ``region``, ``region_vertices`` and ``hole``.
     template : the patch ``P`` with exactly one boundary loop: ``(V_P, F_P)``, a
-        ``trimesh.Trimesh`` / ``MeshData``, or ``(V_src, F_src, faces)`` selecting faces of a mesh
-        (the same or another one).
+        ``trimesh.Trimesh`` / ``MeshData``, ``(V_src, F_src, faces)`` selecting faces of a mesh
+        (the same or another one; its context rings then take part in the alignment), or
+        ``"mirror"``: the mirror image of the region's counterpart across the mesh's symmetry
+        plane, detected on the intact surface (refused when the mesh is not symmetric enough).
     region_vertices : vertex selection (indices, boolean/0-1 mask or mask file); the region is
         the faces with all three vertices selected.
     hole : index of an existing boundary loop of the mesh (``topology.boundary_loops`` order,
@@ -247,15 +226,21 @@ def complete(
     orientation : ``"template"`` (trust the template's face orientation: its outside must be the
         mesh's outside) or ``"auto"`` (also try the opposite direction and flip the template's
         faces if that matches better; ambiguous for planar loops).
-    icp : refinement of the automatic alignment. ``"boundary"``: ICP of ``b_P`` against the
-        polyline ``b0``, then a refit on the matched boundary vertices. ``"surface"``: the same,
-        then trimmed point-to-plane ICP of the template's vertices within ``icp_rings`` rings of
-        ``b_P`` against the surface around the hole (the remaining faces within 3 rings of
-        ``b0`` plus the region's faces ``T̄``, which are being replaced but still say where the
-        surface was; the better of the two fits is kept). ``"auto"`` (default):
-        ``"surface"`` when a region of faces is replaced, ``"boundary"`` for a hole. ``"none"``
-        (or False): the coarse fit only.
-    icp_rings : rings of template vertices used by the surface ICP (0: the boundary only).
+    icp : refinement of the automatic alignment (:func:`meshrepair.alignment.place_template`).
+        ``"context"`` (what ``"auto"``, the default, means): ICP of ``b_P`` against the polyline
+        ``b0`` and refits on matched boundary vertices, then, for a template given as a piece of
+        a mesh, trimmed point-to-plane ICP of its boundary and its own context rings
+        (``icp_rings`` rings of the source mesh outside it) against the remaining faces around
+        ``b0``; the faces being replaced are never used. ``"boundary"``: the boundary steps
+        only. ``"surface"`` (opt-in for an undamaged region): the boundary steps, then the
+        template's vertices within ``icp_rings`` rings of ``b_P`` fitted to the surface around
+        the hole *including the region's faces*. ``"none"`` (or False): the coarse fit only.
+    icp_rings : rings of template vertices (``"surface"``) or of template context (``"context"``)
+        used by the ICP (0: the boundary only).
+    strip_fidelity : weight of the gap-adaptive fidelity on the strip (default 16 in adaptive
+        mode, 0 in smooth and sharp modes: the paper's free strip).
+    max_symmetry_residual : with ``template="mirror"``, refuse when the symmetry residual (mean
+        edge lengths) is above this.
     fix_outside : vertices outside the strip never move (default True; False with ``denoise``).
         The solve then runs only on the band of ``strip_rings + 2`` rings around the seam.
     denoise : solve on the whole mesh with the two-stage denoising schedule
@@ -284,7 +269,8 @@ def complete(
     MeshRepairError
         Invalid mesh or template (non-manifold, not one boundary loop, several components), a
         region that is not a disc, sizes too different, a template that seems mirrored, a
-        stitched result that is not manifold, or invalid options.
+        stitched result that is not manifold, a mesh not symmetric enough for
+        ``template="mirror"`` (the residual is in the message), or invalid options.
     """
     from .io import as_arrays
     from .validate import check_mesh
@@ -442,70 +428,20 @@ def complete(
     log.info("stitched: %d vertices (%d inserted on b0, %d on b_P), %d faces, seam RMS %.3g",
              len(V_init), ins_region, ins_template, len(F_star), rms_after)
 
-    # ---- masks --------------------------------------------------------------------------------
-    nVs = len(V_init)
-    topo = edge_topology(F_star, nVs)
-    dist = _rings(topo, seam, strip_rings + 2)
-    strip = dist <= strip_rings
+    # ---- masks and blending (blend.py) ---------------------------------------------------------
     # the seam's step across the surface: the gap along the remaining surface's normal at b0
     # (a tangential gap, e.g. two tessellations of one surface, needs no blending)
     n_seam = vertex_normals(Vm, Fm)[b0_2]
     gap_l = np.abs(np.einsum("ij,ij->i", gap, n_seam)) / unit
-    M_V = _strip_fidelity(topo, seam, gap_l, strip, strip_rings, strip_fidelity)
-    fixed = ~strip if fix_outside else np.zeros(nVs, bool)
-
-    def force_for(edges: np.ndarray, d: np.ndarray) -> np.ndarray:
-        ef = np.full(len(edges), -1, np.int8)
-        on = (d[edges[:, 0]] <= strip_rings) & (d[edges[:, 1]] <= strip_rings)
-        ef[on] = _EDGE_FORCE[mode]
-        return ef
-
-    if denoise:
-        from .denoise import default_stages, lambda_from_noise
-        from .noise import estimate_noise
-
-        stages = default_stages(feature_iters=int(iterations), a=a)
-        lam_used = lambda_from_noise(estimate_noise(V_init, F_star)) if lam is None else lam
-    else:
-        stages = (Stage(a=a, eps=1.2, beta2_ratio=1.7, mask="adaptive", max_iter=int(iterations),
-                        min_iter=int(iterations), relax=float(relax), name="blend"),)
-        lam_used = 1.0 if lam is None else float(lam)
-    opts = SolverOptions(lam=lam_used, th=th, stages=stages, tol=tol,
-                         inner_solver=inner_solver, mask_update_every=mask_update_every)
-
-    V_out = V_init.copy()
-    M_E = sharp_edge_mask(face_normals(V_init, F_star), topo, th).astype(bool)
-    edge_force = force_for(topo.edges, dist)
-    history: list[dict] = []
-    n_it, stop = 0, "no iterations"
-    if iterations > 0 and strip.any():
-        if fix_outside:
-            fsel = (dist[F_star] <= strip_rings + 2).all(axis=1)
-            loc = np.unique(F_star[fsel])
-            g2l = np.full(nVs, -1, np.int64)
-            g2l[loc] = np.arange(loc.size)
-            F_loc = g2l[F_star[fsel]]
-            topo_l = edge_topology(F_loc, loc.size)
-            solver = ADMMSolver(F_loc, loc.size, M_V=M_V[loc],
-                                edge_force=force_for(topo_l.edges, dist[loc]),
-                                fixed=fixed[loc], options=opts, topo=topo_l)
-            res = solver.solve(V_init[loc], V_init=V_init[loc], callback=callback)
-            free = ~fixed[loc]
-            V_out[loc[free]] = res.V[free]
-            M_E = sharp_edge_mask(face_normals(V_out, F_star), topo, th).astype(bool)
-            ge = loc[topo_l.edges]
-            codes = topo.edges[:, 0] * np.int64(nVs) + topo.edges[:, 1]
-            gi = np.searchsorted(codes, ge[:, 0] * np.int64(nVs) + ge[:, 1])
-            M_E[gi] = res.M_E
-        else:
-            solver = ADMMSolver(F_star, nVs, M_V=M_V, edge_force=edge_force, fixed=fixed,
-                                options=opts, topo=topo)
-            res = solver.solve(V_init, V_init=V_init, callback=callback)
-            V_out = res.V
-            if fixed.any():
-                V_out[fixed] = V_init[fixed]
-            M_E = res.M_E
-        history, n_it, stop = res.history, res.iterations, res.stop_reason
+    bl = blend_seam(V_init, F_star, seam, gap_l, strip_rings=strip_rings, mode=mode,
+                    strip_fidelity=strip_fidelity, fix_outside=fix_outside, denoise=denoise,
+                    lam=lam, th=th, a=a, iterations=iterations,
+                    mask_update_every=mask_update_every, relax=relax, tol=tol,
+                    inner_solver=inner_solver, callback=callback)
+    V_out, M_V, M_E, topo, edge_force, strip, fixed = (bl.V, bl.M_V, bl.M_E, bl.topo,
+                                                        bl.edge_force, bl.strip, bl.fixed)
+    history, n_it, stop, lam_used = bl.history, bl.iterations, bl.stop_reason, bl.lam
+    nVs = len(V_init)
 
     vertex_map = new_index[:nV].copy()
     corr = {
