@@ -245,6 +245,19 @@ def test_mirror_completion_on_a_symmetric_cad_mesh(fandisk):
         assert res.params["template"] == "mirror"
 
 
+def test_mirror_completion_of_an_existing_hole(fandisk):
+    V, F = symmetrize(*fandisk, axis=0)
+    diag = np.linalg.norm(V.max(0) - V.min(0))
+    c = int(_far_centers(V, F, k=1)[0])
+    faces, _ = geodesic(V, F, c, 5 * mean_edge_length(V, F))
+    Vh, Fh = extract_patch(V, F, np.setdiff1d(np.arange(len(F)), faces))
+    res = complete(Vh, Fh, None, "mirror", hole=0)
+    assert check_mesh(res.V, res.F).is_closed
+    assert point_to_surface(res.V, V, F).max() / diag < 1e-3  # measured 9.4e-6
+    # the mirrored rim of the hole's counterpart is left out of the residual
+    assert res.symmetry["residual_max"] < 1e-6
+
+
 def test_mirror_completion_is_refused_on_a_non_symmetric_mesh(fandisk):
     V, F = fandisk
     l = mean_edge_length(V, F)
@@ -320,10 +333,11 @@ def test_shared_mirror_completion_exactly_symmetric():
 
 @pytest.mark.shared
 def test_shared_mirror_completion_trim_star_and_refusal():
-    """trim_star: symmetric shape (residual 0.005 l), but its two halves are tessellated
-    differently, so the counterpart's boundary is not b0's; measured 0.9e-3..1.5e-3 diag (the
-    1e-3 target is missed here, see docs/completion.md)."""
+    """trim_star: symmetric on average (residual 0.005 l) but not everywhere (mirrored vertices
+    up to 0.2 l from the surface = 3e-3 diag) and its halves are tessellated differently;
+    measured 0.9e-3..1.5e-3 diag (the 1e-3 target is missed here, see docs/completion.md)."""
     V, F = shared_mesh("trim_star.ply")
+    assert detect_symmetry(V, F, samples=10**6)["residual_max"] > 0.15  # measured 0.22
     for err, res in mirror_errors(V, F, _far_centers(V, F, k=3)):
         assert err < 2e-3
         assert res.symmetry["residual"] < 0.01

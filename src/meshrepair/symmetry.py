@@ -75,8 +75,9 @@ def detect_symmetry(V, F, exclude_faces=None, *, loop=None, samples: int = 3000,
     V : (nV, 3) float
     F : (nF, 3) int
     exclude_faces : face indices (e.g. a damaged region), optional
-    loop : (k,) int, optional, the excluded region's boundary loop (for the exclusion ball;
-        default: the excluded faces' vertices)
+    loop : (k,) int, optional, the excluded region's (or a hole's) boundary loop: mirrored
+        vertices falling in a ball around it are left out of the residual (default: the
+        excluded faces' vertices)
     samples : int, number of intact vertices used (a fixed random subset)
     iterations : int, refinement rounds per candidate plane
     seed : int, of the subset
@@ -86,7 +87,8 @@ def detect_symmetry(V, F, exclude_faces=None, *, loop=None, samples: int = 3000,
     dict
         ``normal`` (3,), ``point`` (3,), ``offset`` (``normal . point``), ``residual`` (mean
         distance of the mirrored intact vertices to the intact surface, mean edge lengths),
-        ``residual_p90`` (90th percentile), ``transform`` (4x4 reflection), ``candidates``
+        ``residual_p90`` (90th percentile), ``residual_max`` (largest), ``transform`` (4x4
+        reflection), ``candidates``
         (list of ``(normal, residual)`` per principal plane), ``unit`` (the mean edge length).
     """
     from .io import as_arrays
@@ -107,7 +109,7 @@ def detect_symmetry(V, F, exclude_faces=None, *, loop=None, samples: int = 3000,
         cand_v = np.sort(rng.choice(cand_v, int(samples), replace=False))
     X = V[cand_v]
     ball = None
-    if ex.any():
+    if ex.any() or loop is not None:  # a region, or a hole bounded by ``loop``
         ref = V[np.asarray(loop, np.int64)] if loop is not None else V[np.unique(F[ex])]
         c = ref.mean(axis=0)
         ball = (c, 1.2 * float(np.linalg.norm(ref - c, axis=1).max()) + unit)
@@ -152,7 +154,8 @@ def detect_symmetry(V, F, exclude_faces=None, *, loop=None, samples: int = 3000,
         log.debug("symmetry candidate %s: residual %.3g l", np.round(n0, 3), best[0])
     r, n, p, d = min(results, key=lambda t: t[0])
     return {"normal": n, "point": p, "offset": float(n @ p), "residual": r,
-            "residual_p90": float(np.percentile(d, 90)), "transform": reflection(n, p),
+            "residual_p90": float(np.percentile(d, 90)), "residual_max": float(d.max()),
+            "transform": reflection(n, p),
             "candidates": [(t[1].tolist(), t[0]) for t in results], "unit": float(unit)}
 
 
