@@ -104,12 +104,14 @@ def run_complete(args: argparse.Namespace) -> int:
     elif args.template_region is not None:
         sel = _selection(args.template_region, tmesh.V, tmesh.F)
         if "region" in sel:
-            template = extract_patch(tmesh.V, tmesh.F, sel["region"])
+            faces = sel["region"]
         else:
             faces = np.flatnonzero(sel["region_vertices"][tmesh.F].all(axis=1))
             if faces.size == 0:
                 raise MeshRepairError("--template-region selects no face of the template")
-            template = extract_patch(tmesh.V, tmesh.F, faces)
+        extract_patch(tmesh.V, tmesh.F, faces)  # a clear error for an empty/invalid selection
+        # a piece of a mesh: its context rings around the selection take part in the alignment
+        template = (tmesh.V, tmesh.F, faces)
     else:
         template = (tmesh.V, tmesh.F)
     kw: dict = {}
@@ -118,11 +120,13 @@ def run_complete(args: argparse.Namespace) -> int:
     else:
         kw["hole"] = args.hole
     t_read = time.perf_counter() - t0
-    res = complete(mesh.V, mesh.F, template=template, transform=args.transform,
-                   strip_rings=args.strip_rings, mode=args.mode, allow_scale=args.allow_scale,
-                   orientation=args.orientation, icp=args.icp, iterations=args.iterations,
-                   th=args.th, denoise=args.denoise,
-                   max_symmetry_residual=args.max_symmetry_residual, **kw)
+    from .common import ProgressBar
+
+    bar = ProgressBar(args.iterations, "blend", enabled=not args.quiet)
+    try:
+        res = _run(complete, mesh, template, args, kw, bar)
+    finally:
+        bar.close()
     t_solve = time.perf_counter() - t0 - t_read
     attrs = None
     if out.suffix.lower() == ".ply":
@@ -171,6 +175,14 @@ def run_complete(args: argparse.Namespace) -> int:
     return 0
 
 
+def _run(complete, mesh, template, args, kw, bar):
+    return complete(mesh.V, mesh.F, template=template, transform=args.transform,
+                    strip_rings=args.strip_rings, mode=args.mode, allow_scale=args.allow_scale,
+                    orientation=args.orientation, icp=args.icp, iterations=args.iterations,
+                    th=args.th, denoise=args.denoise,
+                    max_symmetry_residual=args.max_symmetry_residual, callback=bar, **kw)
+
+
 def _jsonable(d):
     if d is None:
         return None
@@ -201,6 +213,8 @@ def register(subparsers) -> None:
     p = subparsers.add_parser(
         "complete",
         help="replace a region (or fill a hole) with a template patch and blend the seam",
+        usage="meshrepair complete IN [TEMPLATE] OUT (--region FILE | --hole K) [--mirror] "
+        "[options]",
         description="Context-aware completion: remove the region of IN given by --region (or "
         "use the existing hole --hole K), align TEMPLATE (a mesh with exactly one boundary "
         "loop) to it, stitch it in and blend the seam strip with the variational model. With "
@@ -253,6 +267,7 @@ def register(subparsers) -> None:
                    help="write history, parameters, timings and correspondence as JSON "
                    "(readable by 'meshrepair report --log')")
     p.add_argument("--force", action="store_true", help="overwrite OUTPUT if it exists")
+    p.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
     from .common import add_report_option
 
     add_report_option(p)
