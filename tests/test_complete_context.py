@@ -258,6 +258,24 @@ def test_mirror_completion_of_an_existing_hole(fandisk):
     assert res.symmetry["residual_max"] < 1e-6
 
 
+def test_mirror_completion_picks_a_plane_the_region_does_not_straddle():
+    """A triangular prism has 4 mirror planes; a region across its mid-height plane (the best
+    one) is completed from a vertical mirror plane instead."""
+    m = trimesh.creation.cylinder(radius=1.0, height=1.2, sections=3)
+    for _ in range(4):
+        m = m.subdivide()
+    V, F = np.asarray(m.vertices, float), np.asarray(m.faces, np.int64)
+    l = mean_edge_length(V, F)
+    diag = np.linalg.norm(V.max(0) - V.min(0))
+    target = np.r_[0.7 * np.array([1.0, 0.0]) + 0.3 * np.array([-0.5, np.sqrt(3) / 2]), 0.0]
+    faces, d = geodesic(V, F, int(np.argmin(np.linalg.norm(V - target, axis=1))), 3 * l)
+    z = V[np.unique(F[faces]), 2]
+    assert z.min() < 0 < z.max()  # the region straddles z = 0
+    res = complete(damage(V, F, faces, d, 3 * l, "spike"), F, faces, "mirror")
+    assert abs(res.symmetry["normal"][2]) < 1e-6  # a vertical plane
+    assert point_to_surface(res.V, V, F).max() / diag < 1e-3  # measured 7.1e-6
+
+
 def test_mirror_completion_is_refused_on_a_non_symmetric_mesh(fandisk):
     V, F = fandisk
     l = mean_edge_length(V, F)

@@ -46,14 +46,25 @@ log = logging.getLogger(__name__)
 __all__ = ["detect_symmetry", "mirror_template"]
 
 
-def _principal_frame(V: np.ndarray, F: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def _principal_frame(V: np.ndarray, F: np.ndarray, degenerate: float = 0.1
+                     ) -> tuple[np.ndarray, np.ndarray]:
+    """Area centroid and candidate normals: the principal axes, plus, for two eigenvalues within
+    ``degenerate`` (relative) of each other, directions every 15 degrees in their eigenspace
+    (there the axes eigh returns are arbitrary, while a mirror normal is still in that plane)."""
     c = np.cross(V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]])
     A = 0.5 * np.linalg.norm(c, axis=1)
     C = V[F].mean(axis=1)
     cm = (A[:, None] * C).sum(0) / A.sum()
     X = C - cm
-    _, U = np.linalg.eigh((A[:, None] * X).T @ X)
-    return cm, U.T
+    w, U = np.linalg.eigh((A[:, None] * X).T @ X)
+    dirs = [U[:, k] for k in range(3)]
+    for i in range(3):
+        for j in range(i + 1, 3):
+            if abs(w[i] - w[j]) <= degenerate * max(w[i], w[j], 1e-300):
+                for t in np.radians(np.arange(15.0, 180.0, 15.0)):
+                    if not np.isclose(t, np.pi / 2):
+                        dirs.append(np.cos(t) * U[:, i] + np.sin(t) * U[:, j])
+    return cm, np.array(dirs)
 
 
 def _plane_from_pairs(X: np.ndarray, Y: np.ndarray, n_prev: np.ndarray
@@ -67,7 +78,7 @@ def _plane_from_pairs(X: np.ndarray, Y: np.ndarray, n_prev: np.ndarray
 
 
 def detect_symmetry(V, F, exclude_faces=None, *, loop=None, samples: int = 3000,
-                    iterations: int = 8, seed: int = 0) -> dict:
+                    iterations: int = 8, seed: int = 0, exhaustive: bool = False) -> dict:
     """The mesh's best mirror plane, found and measured on the surface outside ``exclude_faces``.
 
     Parameters
@@ -81,6 +92,8 @@ def detect_symmetry(V, F, exclude_faces=None, *, loop=None, samples: int = 3000,
     samples : int, number of intact vertices used (a fixed random subset)
     iterations : int, refinement rounds per candidate plane
     seed : int, of the subset
+    exhaustive : refine every candidate (default: stop at the first exact plane, residual below
+        1e-3 mean edge lengths); ``candidates`` then lists every refined plane
 
     Returns
     -------
@@ -88,8 +101,9 @@ def detect_symmetry(V, F, exclude_faces=None, *, loop=None, samples: int = 3000,
         ``normal`` (3,), ``point`` (3,), ``offset`` (``normal . point``), ``residual`` (mean
         distance of the mirrored intact vertices to the intact surface, mean edge lengths),
         ``residual_p90`` (90th percentile), ``residual_max`` (largest), ``transform`` (4x4
-        reflection), ``candidates``
-        (list of ``(normal, residual)`` per principal plane), ``unit`` (the mean edge length).
+        reflection), ``candidates`` (list of ``(normal, point, residual, residual_p90,
+        residual_max)`` of the refined planes, best first, duplicates removed), ``unit`` (the
+        mean edge length).
     """
     from .io import as_arrays
 
@@ -135,7 +149,7 @@ def detect_symmetry(V, F, exclude_faces=None, *, loop=None, samples: int = 3000,
     order = np.argsort([d.mean() for d, _ in first])  # refine the most promising first
     results = []
     for k in order:
-        if results and min(t[0] for t in results) < 1e-3:
+        if not exhaustive and results and min(t[0] for t in results) < 1e-3:
             break  # an exact symmetry was found
         n0, c0 = starts[k]
         n, p = n0.copy(), c0.copy()
@@ -152,11 +166,19 @@ def detect_symmetry(V, F, exclude_faces=None, *, loop=None, samples: int = 3000,
             best = (float(d2.mean()), n, p, d2)
         results.append(best)
         log.debug("symmetry candidate %s: residual %.3g l", np.round(n0, 3), best[0])
-    r, n, p, d = min(results, key=lambda t: t[0])
+    results.sort(key=lambda t: t[0])
+    planes: list = []
+    for t in results:  # distinct planes: normals more than 1 degree apart or offsets > 0.1 l
+        if not any(abs(t[1] @ q[1]) > np.cos(np.radians(1.0))
+                   and abs(abs(t[1] @ t[2]) - abs(q[1] @ q[2])) < 0.1 * unit for q in planes):
+            planes.append(t)
+    r, n, p, d = planes[0]
     return {"normal": n, "point": p, "offset": float(n @ p), "residual": r,
             "residual_p90": float(np.percentile(d, 90)), "residual_max": float(d.max()),
             "transform": reflection(n, p),
-            "candidates": [(t[1].tolist(), t[0]) for t in results], "unit": float(unit)}
+            "candidates": [(t[1].copy(), t[2].copy(), t[0], float(np.percentile(t[3], 90)),
+                            float(t[3].max())) for t in planes],
+            "unit": float(unit)}
 
 
 def _edge_graph(V: np.ndarray, F: np.ndarray):
@@ -296,8 +318,28 @@ def mirror_template(V, F, region_faces, b0, *, max_residual: float = 0.1) -> tup
             f"{sym['residual']:.3g} mean edge lengths (mean distance of the mirrored intact "
             f"surface to itself; the limit max_symmetry_residual is {max_residual:g}). Give a "
             "template instead, or raise the limit if an approximate mirror image will do")
+    try:
+        faces = _counterpart_faces(V, F, region_faces, b0, sym["transform"], sym["unit"])
+    except MeshRepairError as first_error:
+        # the region may straddle this plane while the mesh has another one (a part with
+        # several mirror planes): try the other symmetric-enough planes, best first
+        faces = None
+        allp = detect_symmetry(V, F, region_faces, loop=b0, exhaustive=True)
+        for n, p, r, r90, rmax in allp["candidates"]:
+            if r > max_residual or abs(n @ sym["normal"]) > np.cos(np.radians(1.0)):
+                continue
+            try:
+                faces = _counterpart_faces(V, F, region_faces, b0, reflection(n, p),
+                                           sym["unit"])
+            except MeshRepairError:
+                continue
+            sym = {**sym, "normal": n, "point": p, "offset": float(n @ p), "residual": r,
+                   "residual_p90": r90, "residual_max": rmax, "transform": reflection(n, p),
+                   "candidates": allp["candidates"]}
+            break
+        if faces is None:
+            raise first_error from None
     M = sym["transform"]
-    faces = _counterpart_faces(V, F, region_faces, b0, M, sym["unit"])
     VM = apply_transform(M, V)
     FM = np.ascontiguousarray(F[:, ::-1])
     info = {k: (v.copy() if isinstance(v, np.ndarray) else v) for k, v in sym.items()}
