@@ -75,10 +75,15 @@ from .complete_input import (  # noqa: F401  (re-exported: the public API of thi
     load_transform,
     region_from_vertices,
 )
-from .correspondence import align_loops, apply_transform, monotone_loop_match, split_boundary_edges
 from .errors import MeshRepairError
-from .geometry import mean_edge_length, vertex_normals
-from .stitch import _harmonic_displacement, _rings, _split_ears, _to_loop_params  # noqa: F401
+from .geometry import mean_edge_length
+from .stitch import (  # noqa: F401  (re-exported)
+    _harmonic_displacement,
+    _rings,
+    _split_ears,
+    _to_loop_params,
+    stitch_template,
+)
 from .topology import boundary_loops
 
 log = logging.getLogger(__name__)
@@ -365,75 +370,16 @@ def complete(
     unit = mean_edge_length(V, F)
     report = alignment_report(V, F, b0, VP, bP, T, context=context, target=pl.context_target,
                               unit=unit)
-    A = V[b0]
-    nA, nB = len(A), len(bP)
+    nA, nB = len(b0), len(bP)
 
-    # ---- suitable subdivision -------------------------------------------------------------------
-    rev = ca.reversed
-    flipped = not rev
-    Fm = F[np.setdiff1d(np.arange(nF), region_faces)] if region_faces.size else F.copy()
-    bseq = bP[::-1] if rev else bP
-    VPt = apply_transform(T, VP)
-    la = align_loops(A, VPt[bseq])
-    Vm, Fm, b0_2, new = split_boundary_edges(V, Fm, b0, la.params_A)
-    ins_region = len(new)
-    VP2, FP2, bP2, new = split_boundary_edges(VPt, FP, bP, _to_loop_params(la.params_B, rev))
-    ins_template = len(new)
-    VP2, FP2, n_ears = _split_ears(VP2, FP2, bP2)
-    bseq2 = bP2[::-1] if rev else bP2
-    match, rms_after = monotone_loop_match(Vm[b0_2], VP2[bseq2])
-    pairs_t = bseq2[match]  # template vertex matched with b0_2[i]
-    gap = Vm[b0_2] - VP2[pairs_t]
-    max_gap = float(np.linalg.norm(gap, axis=1).max())
-    # move the template's border so that b_P lands on b0 without folding its first faces
-    VP2 = VP2 + _harmonic_displacement(VP2, FP2, pairs_t, gap, strip_rings)
-
-    # ---- stitching ----------------------------------------------------------------------------
-    keep = np.ones(len(Vm), bool)
-    keep[:nV] = ~removed
-    new_index = np.cumsum(keep) - 1
-    new_index[~keep] = -1
-    n_mesh = int(keep.sum())
-    tmap = np.full(len(VP2), -1, dtype=np.int64)
-    tmap[pairs_t] = new_index[b0_2]
-    interior = tmap < 0
-    tmap[interior] = n_mesh + np.arange(int(interior.sum()))
-    FPn = tmap[FP2]
-    if flipped:
-        FPn = FPn[:, [0, 2, 1]]
-    V_init = np.vstack([Vm[keep], VP2[interior]])
-    F_star = np.vstack([new_index[Fm], FPn]).astype(np.int64)
-    seam = new_index[b0_2]
-    n_loops_in = len(boundary_loops(F, nV))
-    try:
-        rep = check_mesh(V_init, F_star, name="completed mesh", allow_degenerate=True)
-    except MeshRepairError as exc:
-        raise MeshRepairError(
-            f"stitching the template into the hole gives an invalid mesh ({exc}); this happens "
-            "when the template has faces or edges joining boundary vertices that the mesh "
-            "already joins: subdivide the template near its boundary or enlarge the region"
-        ) from None
-    n_loops_out = len(boundary_loops(F_star, len(V_init)))
-    expected = n_loops_in - (1 if hole is not None else 0)
-    if n_loops_out != expected:
-        log.warning("the completed mesh has %d boundary loops (input %d)", n_loops_out,
-                    n_loops_in)
-    if rep.n_degenerate_faces:
-        raise MeshRepairError(
-            f"stitching the template into the hole gives {rep.n_degenerate_faces} zero-area "
-            "faces (template faces whose corners land on collinear seam vertices); subdivide the "
-            "template near its boundary, or choose a slightly different region")
-    if rep.n_pinched_vertices:
-        log.warning("the completed mesh has %d pinched vertices", rep.n_pinched_vertices)
-    log.info("stitched: %d vertices (%d inserted on b0, %d on b_P), %d faces, seam RMS %.3g",
-             len(V_init), ins_region, ins_template, len(F_star), rms_after)
+    # ---- suitable subdivision and stitching (stitch.py) ----------------------------------------
+    st = stitch_template(V, F, region_faces, removed, b0, VP, FP, bP, T, ca.reversed,
+                         strip_rings=strip_rings, hole=hole is not None, unit=unit)
+    V_init, F_star, seam, new_index, n_mesh = st.V_init, st.F_star, st.seam, st.new_index, st.n_mesh
+    rev, flipped = ca.reversed, not ca.reversed
 
     # ---- masks and blending (blend.py) ---------------------------------------------------------
-    # the seam's step across the surface: the gap along the remaining surface's normal at b0
-    # (a tangential gap, e.g. two tessellations of one surface, needs no blending)
-    n_seam = vertex_normals(Vm, Fm)[b0_2]
-    gap_l = np.abs(np.einsum("ij,ij->i", gap, n_seam)) / unit
-    bl = blend_seam(V_init, F_star, seam, gap_l, strip_rings=strip_rings, mode=mode,
+    bl = blend_seam(V_init, F_star, seam, st.gap_l, strip_rings=strip_rings, mode=mode,
                     strip_fidelity=strip_fidelity, fix_outside=fix_outside, denoise=denoise,
                     lam=lam, th=th, a=a, iterations=iterations,
                     mask_update_every=mask_update_every, relax=relax, tol=tol,
@@ -451,17 +397,17 @@ def complete(
         "n_hole": int(nA),
         "n_template": int(nB),
         "n_seam": int(len(seam)),
-        "inserted_region": int(ins_region),
-        "inserted_template": int(ins_template),
+        "inserted_region": int(st.inserted_region),
+        "inserted_template": int(st.inserted_template),
         "transform": T.copy(),
         "fit": pl.fit,
         "rms_before": pl.rms_before,
         "rms_coarse": float(ca.rms),
         "rms_other_direction": pl.rms_other_direction,
         "icp": icp_info,
-        "rms_after": float(rms_after),
-        "max_gap": max_gap,
-        "ears_split": int(n_ears),
+        "rms_after": float(st.rms_after),
+        "max_gap": st.max_gap,
+        "ears_split": int(st.ears_split),
         "size_ratio": pl.size_ratio,
     }
     params = {"strip_rings": strip_rings, "mode": mode, "allow_scale": allow_scale,

@@ -1,6 +1,8 @@
 """Stitching a template into a hole: ring distances, ears, harmonic spreading (Sect. 5).
 
-Helpers of :func:`meshrepair.complete.complete` that work on the two meshes being joined:
+:func:`stitch_template` does the suitable subdivision of both loops and the stitching of
+:func:`meshrepair.complete.complete` (steps 4 and 5 of its docstring). Helpers that work on the
+two meshes being joined:
 edge-ring distances to a vertex set (:func:`_rings`), splitting template faces that own two
 boundary edges (:func:`_split_ears`), spreading the seam gap over the template's first rings
 (:func:`_harmonic_displacement`), and converting split fractions between a loop and its
@@ -9,10 +11,19 @@ reversed sequence (:func:`_to_loop_params`).
 
 from __future__ import annotations
 
+import logging
+from dataclasses import dataclass
+
 import numpy as np
 import scipy.sparse as sp
 
-from .topology import edge_topology, vertex_adjacency
+from .errors import MeshRepairError
+from .geometry import vertex_normals
+from .loopmatch import align_loops, monotone_loop_match
+from .rigid import apply_transform
+from .topology import boundary_loops, edge_topology, vertex_adjacency
+
+log = logging.getLogger(__name__)
 
 
 def _to_loop_params(params_seq: list[np.ndarray], reversed_seq: bool) -> list[np.ndarray]:
@@ -118,3 +129,120 @@ def _harmonic_displacement(V: np.ndarray, F: np.ndarray, loop: np.ndarray, disp:
     rhs = -(L[inner] @ D)
     D[inner] = np.asarray(spsolve(L_ii, rhs)).reshape(-1, 3)
     return D
+
+
+@dataclass
+class Stitched:
+    """Result of :func:`stitch_template`.
+
+    Attributes
+    ----------
+    V_init, F_star : the stitched mesh ``V^(0)``, ``T*`` (see ``complete`` for the order)
+    seam : (n,) int64, ``b0`` after subdivision, in the stitched mesh
+    new_index : (nV + inserted,) int64, new index of each vertex of the subdivided mesh (-1:
+        removed)
+    n_mesh : int, vertices kept from the mesh (the template's interior vertices follow)
+    gap_l : (n,) float64, normal seam gap per seam vertex, in mean edge lengths
+    max_gap, rms_after : float, largest and RMS distance of the paired seam points
+    inserted_region, inserted_template, ears_split : int
+    """
+
+    V_init: np.ndarray
+    F_star: np.ndarray
+    seam: np.ndarray
+    new_index: np.ndarray
+    n_mesh: int
+    gap_l: np.ndarray
+    max_gap: float
+    rms_after: float
+    inserted_region: int
+    inserted_template: int
+    ears_split: int
+
+
+def stitch_template(V: np.ndarray, F: np.ndarray, region_faces: np.ndarray, removed: np.ndarray,
+                    b0: np.ndarray, VP: np.ndarray, FP: np.ndarray, bP: np.ndarray,
+                    T: np.ndarray, rev: bool, *, strip_rings: int, hole: bool,
+                    unit: float) -> Stitched:
+    """Subdivide both loops to a common sampling and stitch the placed template into the hole.
+
+    Parameters
+    ----------
+    V, F : the mesh; region_faces : faces removed; removed : (nV,) bool, vertices removed
+    b0 : the hole's loop (remaining faces' orientation)
+    VP, FP, bP : the template and its loop; T : (4, 4), its placement
+    rev : the template loop runs against ``b0`` (no face flip needed)
+    strip_rings : rings of the template over which the seam gap is spread
+    hole : an existing hole is completed (one boundary loop fewer expected)
+    unit : mean edge length (for ``gap_l``)
+    """
+    from .correspondence import split_boundary_edges
+    from .validate import check_mesh
+
+    flipped = not rev
+    nV, nF = len(V), len(F)
+    A = V[b0]
+    Fm = F[np.setdiff1d(np.arange(nF), region_faces)] if region_faces.size else F.copy()
+    bseq = bP[::-1] if rev else bP
+    VPt = apply_transform(T, VP)
+    la = align_loops(A, VPt[bseq])
+    Vm, Fm, b0_2, new = split_boundary_edges(V, Fm, b0, la.params_A)
+    ins_region = len(new)
+    VP2, FP2, bP2, new = split_boundary_edges(VPt, FP, bP, _to_loop_params(la.params_B, rev))
+    ins_template = len(new)
+    VP2, FP2, n_ears = _split_ears(VP2, FP2, bP2)
+    bseq2 = bP2[::-1] if rev else bP2
+    match, rms_after = monotone_loop_match(Vm[b0_2], VP2[bseq2])
+    pairs_t = bseq2[match]  # template vertex matched with b0_2[i]
+    gap = Vm[b0_2] - VP2[pairs_t]
+    max_gap = float(np.linalg.norm(gap, axis=1).max())
+    # move the template's border so that b_P lands on b0 without folding its first faces
+    VP2 = VP2 + _harmonic_displacement(VP2, FP2, pairs_t, gap, strip_rings)
+
+    keep = np.ones(len(Vm), bool)
+    keep[:nV] = ~removed
+    new_index = np.cumsum(keep) - 1
+    new_index[~keep] = -1
+    n_mesh = int(keep.sum())
+    tmap = np.full(len(VP2), -1, dtype=np.int64)
+    tmap[pairs_t] = new_index[b0_2]
+    interior = tmap < 0
+    tmap[interior] = n_mesh + np.arange(int(interior.sum()))
+    FPn = tmap[FP2]
+    if flipped:
+        FPn = FPn[:, [0, 2, 1]]
+    V_init = np.vstack([Vm[keep], VP2[interior]])
+    F_star = np.vstack([new_index[Fm], FPn]).astype(np.int64)
+    seam = new_index[b0_2]
+    n_loops_in = len(boundary_loops(F, nV))
+    try:
+        rep = check_mesh(V_init, F_star, name="completed mesh", allow_degenerate=True)
+    except MeshRepairError as exc:
+        raise MeshRepairError(
+            f"stitching the template into the hole gives an invalid mesh ({exc}); this happens "
+            "when the template has faces or edges joining boundary vertices that the mesh "
+            "already joins: subdivide the template near its boundary or enlarge the region"
+        ) from None
+    n_loops_out = len(boundary_loops(F_star, len(V_init)))
+    expected = n_loops_in - (1 if hole else 0)
+    if n_loops_out != expected:
+        log.warning("the completed mesh has %d boundary loops (input %d)", n_loops_out,
+                    n_loops_in)
+    if rep.n_degenerate_faces:
+        raise MeshRepairError(
+            f"stitching the template into the hole gives {rep.n_degenerate_faces} zero-area "
+            "faces (template faces whose corners land on collinear seam vertices); subdivide the "
+            "template near its boundary, or choose a slightly different region")
+    if rep.n_pinched_vertices:
+        log.warning("the completed mesh has %d pinched vertices", rep.n_pinched_vertices)
+    log.info("stitched: %d vertices (%d inserted on b0, %d on b_P), %d faces, seam RMS %.3g",
+             len(V_init), ins_region, ins_template, len(F_star), rms_after)
+
+    # the seam's step across the surface: the gap along the remaining surface's normal at b0
+    # (a tangential gap, e.g. two tessellations of one surface, needs no blending)
+    n_seam = vertex_normals(Vm, Fm)[b0_2]
+    gap_l = np.abs(np.einsum("ij,ij->i", gap, n_seam)) / unit
+    return Stitched(V_init=V_init, F_star=F_star, seam=seam, new_index=new_index, n_mesh=n_mesh,
+                    gap_l=gap_l, max_gap=max_gap, rms_after=float(rms_after),
+                    inserted_region=ins_region, inserted_template=ins_template,
+                    ears_split=n_ears)
