@@ -392,3 +392,20 @@ def test_cli_template_region_uses_the_template_context(tmp_path, fandisk):
     assert run["alignment"]["context_rms"] < 1e-9
     m = read_mesh(out)
     assert point_to_surface(m.V, V, F).max() / diag < 1e-3
+
+
+def test_mirror_completion_commutes_with_a_rigid_motion(fandisk):
+    """Moving the damaged mesh moves the result the same way (plane detection, cut, alignment
+    and blending are all equivariant)."""
+    V, F = symmetrize(*fandisk, axis=0)
+    l = mean_edge_length(V, F)
+    c = int(_far_centers(V, F, k=1)[0])
+    faces, d = geodesic(V, F, c, 5 * l)
+    Vd = damage(V, F, faces, d, 5 * l, "noise")
+    T = random_rigid(11, 3.0)
+    r0 = complete(Vd, F, faces, "mirror", iterations=20)
+    r1 = complete(apply_transform(T, Vd), F, faces, "mirror", iterations=20)
+    assert np.array_equal(r0.F, r1.F)
+    np.testing.assert_allclose(r1.V, apply_transform(T, r0.V), atol=1e-6 * l)
+    n0 = T[:3, :3] @ r0.symmetry["normal"]
+    assert abs(abs(n0 @ r1.symmetry["normal"]) - 1) < 1e-9
