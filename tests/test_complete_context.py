@@ -214,6 +214,13 @@ def test_detect_symmetry_recovers_a_plane_after_a_rigid_motion(fandisk):
     assert abs(abs(s["normal"] @ n_true) - 1) < 1e-9
     assert s["residual"] < 1e-6
     assert detect_symmetry(*fandisk)["residual"] > 1.0  # measured 1.66
+    with pytest.raises(MeshRepairError, match="samples"):
+        detect_symmetry(V, F, samples=2)
+    with pytest.raises(MeshRepairError, match="exclude_faces"):
+        detect_symmetry(V, F, [len(F)])
+    mask = np.zeros(len(F), bool)
+    mask[:10] = True
+    assert detect_symmetry(V, F, mask)["residual"] < 1e-6  # a boolean face mask
 
 
 def _far_centers(V, F, k=2, seed=0):

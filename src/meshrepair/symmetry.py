@@ -85,7 +85,7 @@ def detect_symmetry(V, F, exclude_faces=None, *, loop=None, samples: int = 3000,
     ----------
     V : (nV, 3) float
     F : (nF, 3) int
-    exclude_faces : face indices (e.g. a damaged region), optional
+    exclude_faces : face indices or a boolean face mask (e.g. a damaged region), optional
     loop : (k,) int, optional, the excluded region's (or a hole's) boundary loop: mirrored
         vertices falling in a ball around it are left out of the residual (default: the
         excluded faces' vertices)
@@ -105,12 +105,17 @@ def detect_symmetry(V, F, exclude_faces=None, *, loop=None, samples: int = 3000,
         residual_max)`` of the refined planes, best first, duplicates removed), ``unit`` (the
         mean edge length).
     """
+    from .complete_input import _face_selection
     from .io import as_arrays
 
     V, F = as_arrays(V, F)
+    if int(samples) != samples or samples < 8:
+        raise MeshRepairError(f"samples must be an integer >= 8, got {samples}")
+    if int(iterations) != iterations or iterations < 0:
+        raise MeshRepairError(f"iterations must be an integer >= 0, got {iterations}")
     ex = np.zeros(len(F), bool)
-    if exclude_faces is not None and len(exclude_faces):
-        ex[np.asarray(exclude_faces, np.int64)] = True
+    if exclude_faces is not None:
+        ex[_face_selection(exclude_faces, len(F), "exclude_faces")] = True
     Fi = F[~ex]
     if len(Fi) < 4:
         raise MeshRepairError("too little intact surface to look for a symmetry plane")
