@@ -35,10 +35,13 @@ class PageParser(HTMLParser):
         self.cells: list[str] = []
         self.text: list[str] = []
         self.tags: list[str] = []
+        self.scripts: list[dict] = []
         self._in_cell = False
 
     def handle_starttag(self, tag, attrs):
         self.tags.append(tag)
+        if tag == "script":
+            self.scripts.append(dict(attrs))
         if tag == "img":
             self.images.append(dict(attrs).get("src", ""))
         elif tag == "table":
@@ -112,19 +115,27 @@ def test_report_is_self_contained_with_tables_images_and_metrics(tmp_path):
     assert len(pngs) >= 4 and len(pngs) == len(page.images)
     shapes = [decode_png(s).shape for s in pngs]
     assert all(h > 50 and w > 50 for h, w, _ in shapes)
-    # offline: no scripts, no external resources, text escaped
-    assert "script" not in page.tags and "link" not in page.tags
+    # offline: only inline scripts (the viewer: import map of data: URLs, its data, its module),
+    # no external resources, text escaped
+    assert "link" not in page.tags
+    assert [sc.get("type") for sc in page.scripts] == ["importmap", "application/json", "module"]
+    assert all("src" not in sc for sc in page.scripts)
+    imports = json.loads(raw.split('<script type="importmap">')[1].split("</script>")[0])
+    assert list(imports["imports"]) == ["three"]
+    assert imports["imports"]["three"].startswith("data:text/javascript;base64,")
     assert "http://" not in raw and "https://" not in raw
     assert "<denoising>" not in raw and "&lt;denoising&gt;" in raw
     assert "<b>" not in raw and "&lt;b&gt;not bold&lt;/b&gt;" in raw
     text = "".join(page.text)
     assert "M_E:" in text and "edges" in text and "M_V:" in text and "vertices" in text
+    assert "vertexs" not in raw  # the plural of the mask captions
+    assert f"of {len(V)} vertices on the output mesh" in text
 
 
 def test_report_without_optional_parts(tmp_path):
     V, F = sphere(1)
     out = tmp_path / "min.html"
-    write_report(out, title="minimal", output_mesh=(V, F), image_size=96)
+    write_report(out, title="minimal", output_mesh=(V, F), image_size=96, viewer=False)
     page = parse(out)
     text = "".join(page.text)
     assert "No convergence history recorded." in text and "No metrics given." in text
