@@ -1,7 +1,8 @@
 // meshrepair 3-D viewer: side-by-side panes with linked cameras (see meshrepair/viewer/page.py
 // for the page layout). "three" is resolved by the page's import map to the vendored bundle.
 import {
-  AmbientLight, BufferAttribute, BufferGeometry, Color, DirectionalLight, DoubleSide,
+  AmbientLight, BufferAttribute, BufferGeometry, Color, ColorManagement, DirectionalLight,
+  DoubleSide, LinearSRGBColorSpace,
   LineBasicMaterial, LineSegments, Mesh, MeshBasicMaterial, MeshLambertMaterial, OrbitControls,
   PerspectiveCamera, REVISION, Scene, Vector3, WebGLRenderer,
 } from "three";
@@ -26,22 +27,24 @@ function bytes(s) {
 }
 const f32 = (s) => { const b = bytes(s); return new Float32Array(b.buffer, 0, b.length >> 2); };
 const u32 = (s) => { const b = bytes(s); return new Uint32Array(b.buffer, 0, b.length >> 2); };
-const toLinear = (c) => (c <= 0.04045 ? c / 12.92 : Math.pow((c + 0.055) / 1.055, 2.4));
+// Shading is done on the sRGB values themselves, no colour management: the same colours and
+// the same Lambert head-light shading (ambient 0.18 + 0.82 cos) as meshrepair.render's PNGs.
+ColorManagement.enabled = false;
 const fmt = (x) => (Math.abs(x) >= 1e4 || (Math.abs(x) < 1e-3 && x !== 0)
   ? x.toExponential(2) : String(Number(x.toPrecision(3))));
 const hex = (rgb) => "#" + rgb.map((c) => c.toString(16).padStart(2, "0")).join("");
 
 // ---------------------------------------------------------------------------------------------
-// colour tables: per scalar name, sRGB bytes -> linear floats for the vertex colours
+// colour tables: per scalar name, sRGB bytes -> floats for the vertex colours
 
 const specs = {};
 for (const [name, s] of Object.entries(data.scalars)) {
   if (s.categories) {
-    specs[name] = { ...s, linear: s.colors.map((c) => c.map((x) => toLinear(x / 255))) };
+    specs[name] = { ...s, linear: s.colors.map((c) => c.map((x) => x / 255)) };
   } else {
     const lut = bytes(s.lut);
     const linear = new Float32Array(lut.length);
-    for (let i = 0; i < lut.length; i++) linear[i] = toLinear(lut[i] / 255);
+    for (let i = 0; i < lut.length; i++) linear[i] = lut[i] / 255;
     specs[name] = { ...s, lutBytes: lut, linear };
   }
 }
@@ -169,6 +172,7 @@ function makePane(info) {
   panesDiv.append(div);
 
   const renderer = new WebGLRenderer({ antialias: true, preserveDrawingBuffer: true });
+  renderer.outputColorSpace = LinearSRGBColorSpace;
   renderer.setPixelRatio(window.devicePixelRatio || 1);
   holder.append(renderer.domElement);
   const scene = new Scene();
@@ -215,11 +219,11 @@ function makePane(info) {
     scene.add(sharp);
   }
   const camera = new PerspectiveCamera(FOV, 1, 0.01, 100);
-  const light = new DirectionalLight(0xffffff, 2.2);
+  const light = new DirectionalLight(0xffffff, 0.82 * Math.PI);
   light.position.set(0, 0, 0);
   light.target.position.set(0, 0, -1);
   camera.add(light, light.target);
-  scene.add(camera, new AmbientLight(0xffffff, 0.6));
+  scene.add(camera, new AmbientLight(0xffffff, 0.18 * Math.PI));
   const controls = new OrbitControls(camera, renderer.domElement);
   controls.target.set(...data.scene.center);
   const p = { info, div, holder, renderer, scene, camera, controls, geom, colours, material,
