@@ -635,9 +635,9 @@ def render_mesh(
     mode = _resolve_color_mode(color_by, scalars)
     values = _scalar_field(V, F, mode, scalars)
     lo, hi = _value_range(values, mode, clip_percentile, vmin, vmax)
+    cats = _categories(values, mode, categorical, vmin, vmax, cmap)
     cmap = cmap or ("coolwarm" if mode == "curvature" else "viridis")
     _lut(cmap)  # validate early
-    cats = _categories(values, mode, categorical, vmin, vmax, cmap)
     em = _selected_edges(F, len(V), edge_mask)
     hl = _face_highlight(F, len(V), region_mask)
     axes, window, near = _aim(azimuth, elevation, view_dir, look_at, radius, clip)

@@ -516,7 +516,7 @@ def hole_table(holes: Sequence[Mapping]) -> str:
             ("n_new_faces", "new faces"), ("n_intersections", "intersections")]
     out = ["<table>", "<tr>" + "".join(f"<th>{_esc(h)}</th>" for _, h in cols) + "</tr>"]
     for rec in holes:
-        rec = dict(rec) if isinstance(rec, Mapping) else dict(getattr(rec, "as_dict")())
+        rec = dict(rec) if isinstance(rec, Mapping) else dict(rec.as_dict())
         cells = []
         for key, _ in cols:
             v = rec.get(key, "")

@@ -126,10 +126,12 @@ def _add_view_options(p: argparse.ArgumentParser) -> None:
                    help="anti-aliasing factor (default 1)")
     a = p.add_argument_group("aiming the camera (instead of fitting the whole mesh)")
     a.add_argument("--view-dir", default=None, metavar="DX,DY,DZ",
-                   help="direction the camera looks in (replaces --azimuth/--elevation); "
-                   "default with --frame-*: straight at the region, against its normal")
+                   help="direction the camera looks in (replaces --azimuth/--elevation; "
+                   "write --view-dir=-1,0,0 when it starts with a minus); default with "
+                   "--frame-*: straight at the region, against its normal")
     a.add_argument("--look-at", default=None, metavar="X,Y,Z",
-                   help="point at the centre of the picture (needs --radius)")
+                   help="point at the centre of the picture (needs --radius; "
+                   "--look-at=-1,0,0 for a leading minus)")
     a.add_argument("--radius", type=float, default=None, metavar="R",
                    help="radius of the sphere around --look-at (or the framed region) that "
                    "fills the picture")
