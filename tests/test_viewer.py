@@ -138,7 +138,7 @@ def test_mesh_pane_and_regions():
     pane = mesh_pane(V, F, "p", attributes={"filled": filled, "junk": np.zeros(3)})
     assert set(pane.scalars) == {"mean curvature", "filled"}
     assert pane.highlight is not None and pane.highlight_label == "filled faces"
-    assert np.array_equal(pane.highlight, filled[F].all(axis=1).astype(bool))
+    assert np.array_equal(pane.highlight, filled[F].any(axis=1).astype(bool))
     frames, details = mesh_regions(V, F, highlight=pane.highlight, label="filled")
     names = [f.name for f in frames]
     assert names == ["hole 0", "hole 1", "filled 0"]

@@ -47,8 +47,9 @@ def mesh_pane(
     attributes : dict of str to (nV,) array, optional
         Per-vertex attributes of the mesh file (numeric ones become colour choices).
     highlight : (nF,) bool, optional
-        Faces to highlight; default: the faces whose three vertices are set in the first
-        attribute of :data:`HIGHLIGHT_ATTRIBUTES` present (0/1 values).
+        Faces to highlight; default: the faces with a vertex set in the first attribute of
+        :data:`HIGHLIGHT_ATTRIBUTES` present (0/1 values; ``filled`` marks the new vertices of
+        a fill, so these are its patch faces, except patch faces made of three rim vertices).
     highlight_label : str, optional
         Default: ``"<attribute> faces"``.
     sharp_threshold : float or None
@@ -75,8 +76,8 @@ def mesh_pane(
             a = attrs.get(name)
             if a is not None and len(np.ravel(a)) == len(V) and _is_mask(np.ravel(a)):
                 m = np.ravel(a).astype(bool)
-                if m.any():
-                    highlight = m[F].all(axis=1)
+                if m.any():  # the new (patch) vertices: a patch face has at least one
+                    highlight = m[F].any(axis=1)
                     highlight_label = highlight_label or f"{name} faces"
                 break
     sharp = None
