@@ -18,8 +18,8 @@ _SUFFIXES = (".html", ".htm")
 
 def run_view(args: argparse.Namespace) -> int:
     """Handler of ``meshrepair view``; returns the exit code."""
-    from ..geometry import mean_edge_length
-    from ..topology import boundary_loops
+    from ..geometry import edge_lengths
+    from ..topology import boundary_loops, edge_topology
     from ..viewer import DEFAULT_FACE_BUDGET, write_viewer
     from ..viewer.content import mesh_pane, mesh_regions
     from .common import output_path
@@ -60,7 +60,9 @@ def run_view(args: argparse.Namespace) -> int:
         metrics["vertices"].append(len(m.V))
         metrics["faces"].append(len(m.F))
         metrics["boundary loops"].append(len(boundary_loops(m.F, len(m.V))))
-        metrics["mean edge length"].append(mean_edge_length(m.V, m.F))
+        # the unique edges from the (compiled) edge table: 0.1 s at 1M faces, not 3.7 s
+        metrics["mean edge length"].append(
+            float(edge_lengths(m.V, edge_topology(m.F, len(m.V)).edges).mean()))
         if ref is not None:
             r = reference_metrics(m.V, m.F, ref.V)
             metrics["MSAE vs reference (deg²)"].append(r["MSAE"] if r else "n/a")
