@@ -210,3 +210,31 @@ def test_cli_view(tmp_path, capsys):
     assert main(["view", str(a), "-o", str(a)]) == 2  # never the input
     assert main(["view", str(a), "-o", str(tmp_path / "v.png")]) == 2
     assert main(["view", str(a), "-o", str(tmp_path / "x.html"), "--titles", "1", "2"]) == 2
+
+
+def test_complete_and_inpaint_reports_highlight_their_faces(tmp_path):
+    from meshrepair.cli import main
+    from meshrepair.complete import extract_patch
+    from meshrepair.io import write_mesh
+
+    s = trimesh.creation.icosphere(subdivisions=3)
+    V, F = np.asarray(s.vertices, float), np.asarray(s.faces, np.int64)
+    cap = np.flatnonzero((V[F][:, :, 2] > 0.7).all(axis=1))
+    VP, FP = extract_patch(V, F, cap)
+    inp = write_mesh(tmp_path / "in.ply", V, F)
+    tpl = write_mesh(tmp_path / "tpl.ply", VP + [3.0, 0, 0], FP)
+    reg = tmp_path / "region.txt"
+    reg.write_text("\n".join(map(str, cap)))
+    rep = tmp_path / "c.html"
+    assert main(["complete", str(inp), str(tpl), str(tmp_path / "out.ply"), "--region",
+                 str(reg), "--iterations", "5", "--report", str(rep)]) == 0
+    out = page_data(rep.read_text(encoding="utf-8"))["panes"][1]
+    assert out["highlightLabel"] == "template faces" and out["highlightCount"] > 0
+    rep2 = tmp_path / "i.html"
+    assert main(["inpaint", str(inp), str(tmp_path / "i.ply"), "--sphere", "0,0,1,0.3", "-q",
+                 "--report", str(rep2)]) == 0
+    data = page_data(rep2.read_text(encoding="utf-8"))
+    assert data["panes"][1]["highlightLabel"] == "inpainted faces"
+    assert [r["name"] for r in data["regions"]] == ["hole 0"]
+    assert data["regions"][0]["detail"].startswith("filled (")
+    assert np.dot(data["regions"][0]["normal"], [0, 0, 1]) > 0.95
