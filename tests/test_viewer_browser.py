@@ -140,6 +140,17 @@ def test_each_canvas_shows_the_mesh(view):
         ink = np.any(img < 235, axis=2)  # white background
         assert ink.mean() > 0.08, f"pane {i}: only {ink.mean():.1%} of the canvas is drawn"
         assert img[ink].std() > 5  # shaded, not a flat silhouette
+    # the panes follow the window: narrower window, narrower canvases, still drawn
+    w0 = view.page.locator(".mr-pane canvas").nth(0).bounding_box()["width"]
+    f = view.frames()
+    view.page.set_viewport_size({"width": 800, "height": 900})
+    view.settle(f)
+    w1 = view.page.locator(".mr-pane canvas").nth(0).bounding_box()["width"]
+    assert w1 < 0.75 * w0
+    assert view.page.evaluate("window.meshrepairViewer.panes[0].renderer.domElement.width") \
+        == round(w1)
+    assert np.any(view.canvas(0) < 235, axis=2).mean() > 0.08
+    assert view.errors == []
 
 
 def test_cameras_stay_in_sync_after_drag_pan_and_zoom(view):

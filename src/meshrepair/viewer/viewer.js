@@ -233,11 +233,14 @@ function makePane(info) {
   return p;
 }
 
+// The canvas' CSS width is 100 % of its pane (so panes can shrink); its drawing buffer is
+// resized to the pane's width here, on load and on every window resize.
 function layout() {
   const h = data.height;
   for (const p of panes) {
     const w = Math.max(200, Math.floor(p.holder.clientWidth || 400));
-    p.renderer.setSize(w, h);
+    p.renderer.setSize(w, h, false);
+    p.renderer.domElement.style.height = h + "px";
     p.camera.aspect = w / h;
     p.camera.updateProjectionMatrix();
   }
