@@ -63,17 +63,24 @@ def _write(out: Path, res, log_path: str | None, extra: dict) -> None:
 def _report(args: argparse.Namespace, res, m) -> None:
     from .common import write_run_report
 
+    if not args.report:
+        return
+    from ..viewer.content import hole_regions
+
+    highlight = np.zeros(len(res.F), bool)
+    highlight[res.new_faces] = True
+    regions, details = hole_regions(res.V, res.F, res.holes)
     write_run_report(
         args.report, title=f"meshrepair {args.command} {Path(args.input).name}",
+        holes=[h.as_dict() for h in res.holes], highlight=highlight,
+        highlight_label="inpainted faces" if args.command == "inpaint" else "filled faces",
+        regions=regions, region_details=details, sharp_mask=res.M_E,
         input_mesh=(m.V, m.F), output_mesh=(res.V, res.F),
         masks={"filled_V": res.filled_mask, "M_E": res.M_E}, history=res.history,
         parameters=res.params, timings=res.timings,
         metrics={"holes found": len(res.holes), "holes filled": res.n_filled,
                  "holes skipped": res.n_skipped, "new vertices": int(len(res.new_vertices)),
-                 "new faces": int(len(res.new_faces)),
-                 **{f"hole {h.index} ({h.n_boundary} edges)":
-                    (f"filled ({h.reason})" if h.status == "filled" else f"skipped: {h.reason}")
-                    for h in res.holes}})
+                 "new faces": int(len(res.new_faces))})
 
 
 def run_fill(args: argparse.Namespace) -> int:
