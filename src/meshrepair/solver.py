@@ -30,6 +30,7 @@ import numpy as np
 from . import _kernels as _k
 from ._memory import heap_allocations
 from .inner import INNER_SOLVERS, InnerState, VSubproblem, run_inner
+from .fidelity import prox_group_l1
 from .linear import N_SOLVERS, NormalSystem, solve_normals
 from .penalties import mc_penalty, t_update
 from .relax import TangentialRelaxer
@@ -92,6 +93,8 @@ class SolverOptions:
     mask_source : ``"N"`` (the ADMM normal variable, less noisy) or ``"V"`` (normals of the mesh).
     precondition : Jacobi-precondition the Armijo V-descent (a per-vertex step): a few sliver or
         folded faces otherwise force a tiny global step and stall the whole mesh.
+    huber_delta : threshold δ (mean edge lengths) of the robust Huber fidelity of
+        :mod:`meshrepair.fidelity` (0: the paper's quadratic fidelity).
     min_feature_edges : an adaptive mask keeps only sharp edges in connected chains of at least
         this many sharp edges (1 keeps all). Real creases are long lines; what residual noise
         marks sharp is scattered in short pieces.
@@ -111,6 +114,7 @@ class SolverOptions:
     mask_source: str = "N"
     min_feature_edges: int = 1
     precondition: bool = True
+    huber_delta: float = 0.0
 
     def validate(self) -> None:
         from .errors import MeshRepairError
@@ -124,6 +128,9 @@ class SolverOptions:
             raise MeshRepairError(f"lam must be a finite number >= 0, got {self.lam}")
         if not 0 < self.th < 180:
             raise MeshRepairError(f"th must be an angle in (0, 180) degrees, got {self.th}")
+        if not (np.isfinite(self.huber_delta) and self.huber_delta >= 0):
+            raise MeshRepairError(f"huber_delta must be a finite number >= 0, got "
+                                  f"{self.huber_delta}")
         if not self.stages:
             raise MeshRepairError("at least one stage is needed")
         for s in self.stages:
@@ -339,7 +346,12 @@ class ADMMSolver:
                         N, _ = self.nsys.solve_cg(l * l, c, B, N, rtol=o.n_rtol)
                     N, z = _k.normalize_z(N, Nv, rho2, beta2)
                     # (19) V-update: inner solver on (26), warm-started
-                    self.vsub.set(X0, fid, z)
+                    if o.huber_delta > 0:  # outlier offsets S: prox of δ||.||, fidelity.py
+                        S = prox_group_l1(V - X0, o.huber_delta)
+                        Xd = X0 + S
+                    else:
+                        Xd = X0
+                    self.vsub.set(Xd, fid, z)
                     Vn = run_inner(o.inner_solver, self.vsub, V, o.inner_iters, state)
                     if stage.relax > 0:
                         Vn = self.relaxer.step(Vn, sharp, stage.relax)
@@ -355,7 +367,9 @@ class ADMMSolver:
                     entry = {
                         "iter": k,
                         "stage": stage.name,
-                        "energy": reg + 0.5 * _k.sqdist(V, X0, fid),
+                        "energy": reg + 0.5 * _k.sqdist(V, Xd, fid) + (
+                            o.huber_delta * float(fid @ np.linalg.norm(Xd - X0, axis=1))
+                            if o.huber_delta > 0 else 0.0),
                         "rel_change": float(rel),
                         "res_t": float(np.sqrt(res_t / max(len(fa), 1))),
                         "res_N": float(np.sqrt(res_n / nF)),
