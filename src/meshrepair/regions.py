@@ -29,6 +29,8 @@ from .topology import Topology
 
 MIN_CHAIN = 30
 RINGS = 2
+FLAT_RINGS = 0
+FLAT_ANGLE = 5.0
 
 
 def creased_edges(topo: Topology, N: np.ndarray, th: float) -> np.ndarray:
@@ -55,7 +57,8 @@ def long_chains(topo: Topology, mask: np.ndarray, min_edges: int) -> np.ndarray:
 
 
 def crease_support(topo: Topology, N: np.ndarray, *, th: float = 30.0,
-                   min_chain: int = MIN_CHAIN, rings: int = RINGS) -> np.ndarray:
+                   min_chain: int = MIN_CHAIN, rings: int = RINGS, flat_rings: int = FLAT_RINGS,
+                   flat_angle: float = FLAT_ANGLE) -> np.ndarray:
     """The edges where a crease is supported (see the module docstring).
 
     Parameters
@@ -65,6 +68,8 @@ def crease_support(topo: Topology, N: np.ndarray, *, th: float = 30.0,
     th : dihedral threshold in degrees
     min_chain : minimum chain length ``L`` in edges
     rings : dilation of the supported chains, in vertex rings
+    flat_rings : further growth, only across edges whose dihedral is below ``flat_angle``
+    flat_angle : degrees
 
     Returns
     -------
@@ -81,4 +86,15 @@ def crease_support(topo: Topology, N: np.ndarray, *, th: float = 30.0,
                           shape=(nV, nV)).tocsr()
         for _ in range(rings):
             act |= (A @ act.astype(np.float64)) > 0
+        if flat_rings > 0:
+            flat = ~creased_edges(topo, N, flat_angle) & topo.interior
+            ef = e[flat]
+            Af = sp.coo_matrix((np.ones(2 * len(ef)), (np.r_[ef[:, 0], ef[:, 1]],
+                                                       np.r_[ef[:, 1], ef[:, 0]])),
+                               shape=(nV, nV)).tocsr()
+            for _ in range(flat_rings):
+                new = act | ((Af @ act.astype(np.float64)) > 0)
+                if new.sum() == act.sum():
+                    break
+                act = new
     return act[topo.edges[:, 0]] & act[topo.edges[:, 1]]

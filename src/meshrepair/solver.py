@@ -29,8 +29,8 @@ import numpy as np
 
 from . import _kernels as _k
 from ._memory import heap_allocations
-from .inner import INNER_SOLVERS, InnerState, VSubproblem, run_inner
 from .fidelity import prox_group_l1
+from .inner import INNER_SOLVERS, InnerState, VSubproblem, run_inner
 from .linear import N_SOLVERS, NormalSystem, solve_normals
 from .penalties import mc_penalty, t_update
 from .relax import TangentialRelaxer
