@@ -32,7 +32,7 @@ def test_prox_group_l1_against_brute_force(delta):
     R = rng.normal(size=(12, 3)) * rng.choice([0.1, 1.0, 3.0], size=(12, 1))
     S = prox_group_l1(R, delta)
     for r, s in zip(R, S, strict=True):
-        f = lambda x: 0.5 * np.sum((r - x) ** 2) + delta * np.sqrt(np.sum(x * x) + 1e-18)  # noqa: E731
+        f = lambda x, r=r: 0.5 * np.sum((r - x) ** 2) + delta * np.sqrt(x @ x + 1e-18)  # noqa: E731
         best = min((minimize(f, x0, method="Nelder-Mead",
                              options={"xatol": 1e-10, "fatol": 1e-14, "maxiter": 4000})
                     for x0 in (r, np.zeros(3) + 1e-6)), key=lambda o: o.fun)
