@@ -33,7 +33,7 @@ import numpy as np
 from ._memory import heap_allocations
 from .errors import MeshRepairError
 from .noise import noise_statistics
-from .regions import crease_support
+from .regions import crease_support, flat_edges
 from .relax import untangle
 from .scale import noise_scale
 from .solver import ADMMSolver, SolverOptions, Stage
@@ -118,8 +118,17 @@ def _edge_values_to(topo, edges_old_ids: np.ndarray, values: np.ndarray) -> np.n
 
 
 HEAVY_NOISE = 0.33
+HEAVY_SLOPE = 600.0
 """Above this estimated level the robust stage grows by 600 iterations per unit of γ̂ (up to 120):
 heavy noise is otherwise frozen in by the feature stage (measured in docs/parameters.md)."""
+
+
+HEAVY_ROBUST_A = 0.25
+
+
+def robust_a_from_noise(gamma: float) -> float:
+    """Non-convexity of the robust stage: 0.5, or ``HEAVY_ROBUST_A`` above ``HEAVY_NOISE``."""
+    return HEAVY_ROBUST_A if gamma > HEAVY_NOISE else 0.5
 
 
 def robust_iters_from_noise(gamma: float, folded_fraction: float = 0.0) -> int:
@@ -133,7 +142,7 @@ def robust_iters_from_noise(gamma: float, folded_fraction: float = 0.0) -> int:
     noise reads about half its level but still wants the long stage; its fold-overs give it away.
     """
     if gamma > HEAVY_NOISE:
-        return int(np.clip(round(40 + 600 * (gamma - HEAVY_NOISE)), 40, 120))
+        return int(np.clip(round(40 + HEAVY_SLOPE * (gamma - HEAVY_NOISE)), 40, 120))
     if folded_fraction > 0.01:
         return 40
     return int(np.clip(round(130.0 * gamma), 10, 40))
@@ -143,6 +152,11 @@ def lambda_from_noise(gamma: float) -> float:
     """Default fidelity weight λ for an estimated noise level γ̂ (mean edge lengths)."""
     return float(np.clip(0.02 / max(gamma, 1e-3) ** 2, 0.05, 1.0))
 
+
+FLAT_SPREAD_DEFAULT = 7.0
+"""Crease-supported edges whose robust-probe normal spread is below this (degrees) get the
+flat-TV prior (MC with ``a = FLAT_A``) in the feature stage instead of edge-Willmore."""
+FLAT_A = 0.5
 
 IMPULSIVE_RATIO = 1.3
 """Noise whose RMS level exceeds its robust (MAD) level by this factor is called impulsive: a
@@ -178,14 +192,14 @@ def willmore_weight_from_scale(rho: float, impulsive: bool = False) -> float:
     return float(np.clip(1.0 + 70.0 * (rho - 1.12), 1.0, 8.0))
 
 
-def default_stages(*, robust_iters: int = 40, feature_iters: int = 60, a: float = 10.0
-                   ) -> tuple[Stage, ...]:
+def default_stages(*, robust_iters: int = 40, feature_iters: int = 60, a: float = 10.0,
+                   flat_a: float = 0.0, robust_a: float = 0.5) -> tuple[Stage, ...]:
     """The two-stage schedule described in the module docstring."""
     return (
-        Stage(a=0.5, eps=2.0, beta2_ratio=10.0, mask="all", max_iter=robust_iters,
+        Stage(a=robust_a, eps=2.0, beta2_ratio=10.0, mask="all", max_iter=robust_iters,
               switch_tol=2e-4, min_iter=min(10, robust_iters), name="robust"),
         Stage(a=a, eps=1.2, beta2_ratio=20.0 / 12.0, mask="adaptive", max_iter=feature_iters,
-              name="feature"),
+              flat_a=flat_a, name="feature"),
     )
 
 
@@ -306,7 +320,8 @@ def _denoise(V, F, *, lam, th, a, robust_iters, feature_iters, mask_update_every
     probe = stages is None and regions
     if stages is None:
         stages = default_stages(robust_iters=int(robust_iters), feature_iters=int(feature_iters),
-                                a=a)
+                                a=a, flat_a=FLAT_A if regions else 0.0,
+                                robust_a=robust_a_from_noise(max(gamma, gamma_rms)))
     reorder = len(V) >= REORDER_MIN_VERTICES
     if reorder:  # run on a cache-friendly copy, map the result back exactly
         pv, pf = locality_order(Vs, F)
@@ -320,13 +335,14 @@ def _denoise(V, F, *, lam, th, a, robust_iters, feature_iters, mask_update_every
         Fw, Vw, topo_w = F, Vs, topo
     info = {"support_fraction": float("nan"), "willmore_weight": 1.0, "noise_rho": float("nan"),
             "noise_length": float("nan"), "noise_gamma_scale": float("nan")}
-    force = None
+    force = flat = None
     ww = 1.0 if willmore_weight is None else float(willmore_weight)
     if probe and stages[0].max_iter > 0:
         r1 = ADMMSolver(Fw, len(V), options=SolverOptions(stages=tuple(stages[:1]), **opts_kw),
                         topo=topo_w).solve(Vw)
         sup = crease_support(topo_w, r1.N, th=th)
         force = np.where(sup, -1, 0).astype(np.int8)
+        flat = flat_edges(topo_w, r1.N, sup, max_spread=FLAT_SPREAD_DEFAULT)
         ns = noise_scale(V[pv] if reorder else V, Fw, reference=r1.V, topo=topo_w)
         if willmore_weight is None:
             ww = willmore_weight_from_scale(ns.rho, impulsive)
@@ -339,8 +355,8 @@ def _denoise(V, F, *, lam, th, a, robust_iters, feature_iters, mask_update_every
                  "level %.3f); willmore weight %g", 100 * sup.mean(), ns.rho, ns.length,
                  ns.gamma, ww)
     opts = SolverOptions(stages=tuple(stages), willmore_weight=ww, **opts_kw)
-    res = ADMMSolver(Fw, len(V), options=opts, topo=topo_w, edge_force=force).solve(
-        Vw, callback=callback)
+    res = ADMMSolver(Fw, len(V), options=opts, topo=topo_w, edge_force=force,
+                     flat_edges=flat).solve(Vw, callback=callback)
     if reorder:
         V_out = res.V[inv]
         M_E = _edge_values_to(topo, pv[res.edges], res.M_E)

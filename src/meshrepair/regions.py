@@ -31,6 +31,7 @@ MIN_CHAIN = 30
 RINGS = 2
 FLAT_RINGS = 0
 FLAT_ANGLE = 5.0
+FLAT_SPREAD = 4.0
 
 
 def creased_edges(topo: Topology, N: np.ndarray, th: float) -> np.ndarray:
@@ -98,3 +99,29 @@ def crease_support(topo: Topology, N: np.ndarray, *, th: float = 30.0,
                     break
                 act = new
     return act[topo.edges[:, 0]] & act[topo.edges[:, 1]]
+
+
+def normal_spread(F: np.ndarray, N: np.ndarray, n_vertices: int) -> np.ndarray:
+    """Per vertex, the largest angle (degrees) between an incident face normal and the mean of
+    the incident face normals, shape ``(nV,)``."""
+    F = np.asarray(F, dtype=np.int64)
+    nF = len(F)
+    Avf = sp.csr_matrix((np.ones(3 * nF), (F.ravel(), np.repeat(np.arange(nF), 3))),
+                        shape=(n_vertices, nF))
+    M = Avf @ N
+    M /= np.maximum(np.linalg.norm(M, axis=1, keepdims=True), 1e-300)
+    dev = np.zeros(n_vertices)
+    for k in range(3):
+        c = np.clip(np.einsum("ij,ij->i", N, M[F[:, k]]), -1.0, 1.0)
+        np.maximum.at(dev, F[:, k], np.degrees(np.arccos(c)))
+    return dev
+
+
+def flat_edges(topo: Topology, N: np.ndarray, support: np.ndarray, *,
+               max_spread: float = FLAT_SPREAD) -> np.ndarray:
+    """Edges of the crease-supported region whose two vertices see nearly one normal: the
+    normal spread (:func:`normal_spread`) of the robust result is below ``max_spread`` degrees
+    at both ends. These get the flat-TV prior of :mod:`meshrepair.priors`."""
+    dev = normal_spread(topo.faces, N, topo.n_vertices)
+    ok = dev < max_spread
+    return support & ok[topo.edges[:, 0]] & ok[topo.edges[:, 1]]

@@ -33,6 +33,7 @@ from .fidelity import prox_group_l1
 from .inner import INNER_SOLVERS, InnerState, VSubproblem, run_inner
 from .linear import N_SOLVERS, NormalSystem, solve_normals
 from .penalties import mc_penalty, t_update
+from .priors import reg_energy_mixed, t_update_mixed
 from .relax import TangentialRelaxer
 from .topology import Topology, edge_topology
 
@@ -55,6 +56,8 @@ class Stage:
     switch_tol : leave the stage when the relative change of V is below this (after ``min_iter``).
     min_iter : minimum number of iterations.
     relax : tangential relaxation weight per iteration (0 disables).
+    flat_a : MC non-convexity on the non-sharp edges of the solver's ``flat_edges`` (the
+        flat-TV class of :mod:`meshrepair.priors`; 0: edge-Willmore there as in the paper).
     name : label shown in the history.
     """
 
@@ -66,6 +69,7 @@ class Stage:
     switch_tol: float = 0.0
     min_iter: int = 1
     relax: float = 0.0
+    flat_a: float = 0.0
     name: str = "stage"
 
     @property
@@ -201,13 +205,15 @@ class ADMMSolver:
         Per-edge override of M_E aligned with ``self.topo.edges``: -1 free (the stage decides),
         0 always smooth (Willmore), 1 always sharp (MC).
     fixed : (nV,) bool, optional, vertices that never move.
+    flat_edges : (nE,) bool, optional, the edges of the flat-TV class (stages with ``flat_a``).
     options : SolverOptions
     topo : Topology, optional (precomputed)
     """
 
     def __init__(self, F: np.ndarray, n_vertices: int, *, M_V: np.ndarray | None = None,
                  edge_force: np.ndarray | None = None, fixed: np.ndarray | None = None,
-                 options: SolverOptions | None = None, topo: Topology | None = None):
+                 options: SolverOptions | None = None, topo: Topology | None = None,
+                 flat_edges: np.ndarray | None = None):
         self.options = options or SolverOptions()
         self.options.validate()
         self.F = np.asarray(F, dtype=np.int64)
@@ -217,6 +223,7 @@ class ADMMSolver:
         self.edge_force = (np.full(self.topo.n_edges, -1, np.int8) if edge_force is None
                            else np.asarray(edge_force, dtype=np.int8))
         self.fixed = None if fixed is None else np.asarray(fixed, dtype=bool)
+        self.flat_edges = None if flat_edges is None else np.asarray(flat_edges, dtype=bool)
         self.vsub = VSubproblem(self.F, nV, fixed=self.fixed)
         self._relaxer: TangentialRelaxer | None = None  # built on first use (stage.relax > 0)
         # only interior edges carry a normal jump: t, rho1 live on them
@@ -335,8 +342,15 @@ class ADMMSolver:
                     sh = sharp[self.ie]
                     # (17) t-update
                     DN = _k.grad_edges(N, l, fa, fb)
-                    t = t_update(DN, rho1, sh, a=stage.a, beta1=beta1,
-                                 willmore_weight=o.willmore_weight)
+                    mixed = stage.flat_a > 0 and self.flat_edges is not None
+                    if mixed:
+                        fl = self.flat_edges[self.ie]
+                        t = t_update_mixed(DN, rho1, sh, fl, a=stage.a, a_flat=stage.flat_a,
+                                           beta1=max(beta1, 1.01 * stage.flat_a),
+                                           willmore_weight=o.willmore_weight)
+                    else:
+                        t = t_update(DN, rho1, sh, a=stage.a, beta1=beta1,
+                                     willmore_weight=o.willmore_weight)
                     # (18) N-update via (25), then normalise
                     c = beta2 / beta1
                     B = _k.rhs(c, Nv, rho2, beta1, t, rho1, l, fa, fb)
@@ -363,7 +377,12 @@ class ADMMSolver:
                     V = Vn
                     l = _k.edge_lengths(V, E_int)
                     k += 1
-                    reg = _k.reg_energy(Nv, l, fa, fb, sh, stage.a, o.willmore_weight)
+                    if mixed:
+                        reg = reg_energy_mixed(_k.grad_edges(Nv, l, fa, fb), sh, fl, a=stage.a,
+                                               a_flat=stage.flat_a,
+                                               willmore_weight=o.willmore_weight)
+                    else:
+                        reg = _k.reg_energy(Nv, l, fa, fb, sh, stage.a, o.willmore_weight)
                     entry = {
                         "iter": k,
                         "stage": stage.name,
@@ -405,4 +424,4 @@ class ADMMSolver:
         """A solver on the same connectivity with some options changed (reuses the topology)."""
         return ADMMSolver(self.F, self.topo.n_vertices, M_V=self.M_V, edge_force=self.edge_force,
                           fixed=self.fixed, options=replace(self.options, **changes),
-                          topo=self.topo)
+                          topo=self.topo, flat_edges=self.flat_edges)
