@@ -154,3 +154,42 @@ def test_quality_shared_kinect():
     m = msae(r.V, Vt, F)
     assert m < 0.22 * msae(Vn, Vt, F)
     assert m < 0.7 * msae(taubin_smooth(Vn, F), Vt, F)
+
+
+# -- flat-TV edge class ----------------------------------------------------------------------
+
+def test_t_update_mixed_matches_brute_force():
+    from meshrepair.priors import reg_energy_mixed, t_update_mixed
+
+    rng = np.random.default_rng(5)
+    n, a, af, beta1, w = 30, 10.0, 0.5, 12.0, 2.0
+    DN = rng.normal(size=(n, 3)) * rng.choice([0.05, 0.3, 1.5], size=(n, 1))
+    rho1 = rng.normal(size=(n, 3)) * 0.3
+    sharp = np.arange(n) % 3 == 0
+    flat = np.arange(n) % 3 != 2  # sharp wins where both are set
+    t = t_update_mixed(DN, rho1, sharp, flat, a=a, a_flat=af, beta1=beta1, willmore_weight=w)
+
+    def obj(x, j):
+        d = x - DN[j]
+        reg = reg_energy_mixed(x[None], sharp[j:j + 1], flat[j:j + 1], a=a, a_flat=af,
+                               willmore_weight=w)
+        return reg - rho1[j] @ d + 0.5 * beta1 * d @ d
+
+    for j in range(n):
+        best = min(minimize(obj, x0 + 1e-3, args=(j,), method="Nelder-Mead",
+                            options={"xatol": 1e-10, "fatol": 1e-13, "maxiter": 4000}).fun
+                   for x0 in (t[j], DN[j], np.zeros(3)))
+        assert obj(t[j], j) <= best + 1e-7
+
+
+def test_defaults_record_their_decisions():
+    ico = trimesh.creation.icosphere(subdivisions=3)
+    V = np.asarray(ico.vertices) * 10
+    F = np.asarray(ico.faces, dtype=np.int64)
+    from meshrepair import add_noise
+
+    r = denoise(add_noise(V, F, 0.2, seed=1), F)
+    p = r.params
+    assert p["regions"] and p["support_fraction"] == 0.0  # a sphere has no crease
+    assert p["willmore_weight"] == 1.0 and not p["impulsive"] and p["huber_delta"] == 0.0
+    assert 0.9 < p["noise_rho"] < 1.12

@@ -26,7 +26,7 @@ from __future__ import annotations
 
 import logging
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -152,6 +152,9 @@ def lambda_from_noise(gamma: float) -> float:
     """Default fidelity weight λ for an estimated noise level γ̂ (mean edge lengths)."""
     return float(np.clip(0.02 / max(gamma, 1e-3) ** 2, 0.05, 1.0))
 
+
+PROBE_MAX_ITERS = 120
+"""Cap of the robust probe that decides the crease-supported region."""
 
 FLAT_SPREAD_DEFAULT = 7.0
 """Crease-supported edges whose robust-probe normal spread is below this (degrees) get the
@@ -338,7 +341,9 @@ def _denoise(V, F, *, lam, th, a, robust_iters, feature_iters, mask_update_every
     force = flat = None
     ww = 1.0 if willmore_weight is None else float(willmore_weight)
     if probe and stages[0].max_iter > 0:
-        r1 = ADMMSolver(Fw, len(V), options=SolverOptions(stages=tuple(stages[:1]), **opts_kw),
+        st1 = replace(stages[0], max_iter=min(stages[0].max_iter, PROBE_MAX_ITERS),
+                      min_iter=min(stages[0].min_iter, PROBE_MAX_ITERS))
+        r1 = ADMMSolver(Fw, len(V), options=SolverOptions(stages=(st1,), **opts_kw),
                         topo=topo_w).solve(Vw)
         sup = crease_support(topo_w, r1.N, th=th)
         force = np.where(sup, -1, 0).astype(np.int8)
