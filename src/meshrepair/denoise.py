@@ -35,7 +35,7 @@ from .errors import MeshRepairError
 from .noise import noise_statistics
 from .regions import crease_support, flat_edges
 from .relax import untangle
-from .scale import noise_scale
+from .scale import noise_scale, tangential_ratio
 from .solver import ADMMSolver, SolverOptions, Stage
 
 log = logging.getLogger(__name__)
@@ -152,6 +152,12 @@ def lambda_from_noise(gamma: float) -> float:
     """Default fidelity weight λ for an estimated noise level γ̂ (mean edge lengths)."""
     return float(np.clip(0.02 / max(gamma, 1e-3) ** 2, 0.05, 1.0))
 
+
+TANGENTIAL_MAX = 0.65
+"""Below this :func:`meshrepair.scale.tangential_ratio` the noise is taken to lie along the
+normals (measured 0.08-0.47 on normal noise, 0.83-1.29 on random-direction noise) and the
+crease-supported region gets the tangential anchor of
+:func:`meshrepair.fidelity.tangential_anchor`."""
 
 PROBE_MAX_ITERS = 120
 """Cap of the robust probe that decides the crease-supported region."""
@@ -336,9 +342,10 @@ def _denoise(V, F, *, lam, th, a, robust_iters, feature_iters, mask_update_every
         topo_w = edge_topology(Fw, len(V))
     else:
         Fw, Vw, topo_w = F, Vs, topo
-    info = {"support_fraction": float("nan"), "willmore_weight": 1.0, "noise_rho": float("nan"),
-            "noise_length": float("nan"), "noise_gamma_scale": float("nan")}
-    force = flat = None
+    info = {"tangential_ratio": float("nan"), "support_fraction": float("nan"),
+            "willmore_weight": 1.0, "noise_rho": float("nan"), "noise_length": float("nan"),
+            "noise_gamma_scale": float("nan")}
+    force = flat = anchor = None
     ww = 1.0 if willmore_weight is None else float(willmore_weight)
     if probe and stages[0].max_iter > 0:
         st1 = replace(stages[0], max_iter=min(stages[0].max_iter, PROBE_MAX_ITERS),
@@ -348,6 +355,11 @@ def _denoise(V, F, *, lam, th, a, robust_iters, feature_iters, mask_update_every
         sup = crease_support(topo_w, r1.N, th=th)
         force = np.where(sup, -1, 0).astype(np.int8)
         flat = flat_edges(topo_w, r1.N, sup, max_spread=FLAT_SPREAD_DEFAULT)
+        tr = tangential_ratio(V[pv] if reorder else V, Fw, r1.V, topo=topo_w)
+        if tr < TANGENTIAL_MAX and sup.any():  # noise along the normals: anchor the CAD region
+            anchor = np.zeros(len(V))
+            anchor[topo_w.edges[sup].ravel()] = 1.0
+        info["tangential_ratio"] = tr
         ns = noise_scale(V[pv] if reorder else V, Fw, reference=r1.V, topo=topo_w)
         if willmore_weight is None:
             ww = willmore_weight_from_scale(ns.rho, impulsive)
@@ -361,7 +373,7 @@ def _denoise(V, F, *, lam, th, a, robust_iters, feature_iters, mask_update_every
                  ns.gamma, ww)
     opts = SolverOptions(stages=tuple(stages), willmore_weight=ww, **opts_kw)
     res = ADMMSolver(Fw, len(V), options=opts, topo=topo_w, edge_force=force,
-                     flat_edges=flat).solve(Vw, callback=callback)
+                     flat_edges=flat, anchor=anchor).solve(Vw, callback=callback)
     if reorder:
         V_out = res.V[inv]
         M_E = _edge_values_to(topo, pv[res.edges], res.M_E)

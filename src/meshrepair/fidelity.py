@@ -1,4 +1,5 @@
-"""Robust fidelity for (6): a Huber penalty on the vertex displacement, split with its prox.
+"""Robust fidelity for (6): a Huber penalty on the vertex displacement, split with its prox;
+and a tangential anchor for noise along the normals.
 
 The paper's fidelity ``λ/2 Σ_i (M_V)_i² ||V_i - V⁰_i||²`` lets an impulsive outlier (a vertex
 thrown far along its normal) pull the surface towards it with a force growing linearly in its
@@ -29,6 +30,8 @@ sees exactly the Huber gradient ``λ · clip(r, δ)``.
 from __future__ import annotations
 
 import numpy as np
+
+from . import _kernels as _k
 
 
 def prox_group_l1(R: np.ndarray, delta: float | np.ndarray) -> np.ndarray:
@@ -71,3 +74,38 @@ def huber_delta_from_noise(gamma: float, kappa: float = 2.0) -> float:
     cap acts on.
     """
     return float(kappa * max(gamma, 1e-3))
+
+
+def tangential_anchor(V: np.ndarray, V0: np.ndarray, F: np.ndarray, weight: np.ndarray
+                      ) -> np.ndarray:
+    """Proximal step of the tangential fidelity: remove ``weight_i`` of the tangential part of
+    ``V_i - V⁰_i``.
+
+    Noise along the normals (scanners measure depth; the published Gaussian pairs) leaves the
+    tangential positions of the vertices exact, but the normal-driven V-update (26) lets them
+    drift in the tangent plane (measured: 0.1-0.2 mean edge lengths of tangential error on
+    trim_star, fandisk and igea, where the input had ≤ 0.02), which costs E_V and, on CAD
+    parts, MSAE. The fidelity gets a tangential term ``λ_t/2 Σ_i ||P_i (V_i - V⁰_i)||²`` with
+    ``P_i = I - n_i n_iᵀ`` (``n_i`` the current vertex normal, frozen for the step); its
+    proximal map with step ``τ`` is
+
+    .. math:: V_i \\leftarrow V_i - \\frac{τλ_t}{1 + τλ_t} P_i (V_i - V^0_i),
+
+    applied after each V-step (a proximal-gradient splitting of the fidelity). ``weight`` is
+    ``τλ_t/(1+τλ_t) ∈ [0, 1]`` per vertex; 1 is the projection onto the normal line through
+    ``V⁰_i``.
+
+    Parameters
+    ----------
+    V, V0 : (nV, 3) float64
+    F : (nF, 3) int64
+    weight : (nV,) float in [0, 1]
+
+    Returns
+    -------
+    (nV, 3) new array
+    """
+    n = _k.vertex_normals(np.ascontiguousarray(V), F)
+    d = V - V0
+    dt = d - np.einsum("ij,ij->i", d, n)[:, None] * n
+    return V - np.asarray(weight, dtype=np.float64)[:, None] * dt

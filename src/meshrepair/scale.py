@@ -196,3 +196,35 @@ def correlated_noise(V: np.ndarray, F: np.ndarray, gamma: float, steps: int, *,
     e = topo.edges
     lbar = float(np.linalg.norm(V[e[:, 0]] - V[e[:, 1]], axis=1).mean())
     return V + (gamma * lbar * z)[:, None] * vertex_normals(V, F)
+
+
+def tangential_ratio(V: np.ndarray, F: np.ndarray, reference: np.ndarray, *,
+                     topo: Topology | None = None) -> float:
+    """How much of the noise lies in the tangent plane: ``≈ 0.1-0.5`` for noise along the
+    normals, ``≳ 0.8`` for noise in random directions (measured in docs/parameters.md).
+
+    With ``L = V - W V`` (umbrella Laplacian of the input) split along the vertex normals ``n``
+    of ``reference`` (a denoised version: accurate normals) into ``L_n = <L, n>`` and the
+    tangential rest ``L_t``, and the high-pass ``X - W X`` that removes the smooth part due to
+    the sampling density of a clean mesh,
+
+    .. math:: r_t = \\frac{\\sqrt{\\mathrm{median}\\,\\|L_t - W L_t\\|^2 / 2}}
+                         {1.4826\\,\\mathrm{MAD}(L_n - W L_n)}
+
+    (the tangential part has two components, hence the 2).
+    """
+    V = np.asarray(V, dtype=np.float64)
+    F = np.asarray(F, dtype=np.int64)
+    if topo is None:
+        topo = edge_topology(F, len(V))
+    W = _umbrella_operator(topo)
+    ok = _interior_vertices(topo, 2, W)
+    n = vertex_normals(np.asarray(reference, dtype=np.float64), F)
+    L = V - W @ V
+    ln = np.einsum("ij,ij->i", L, n)
+    T = L - ln[:, None] * n
+    R = (T - W @ T)[ok]
+    den = _mad_std((ln - W @ ln)[ok])
+    if not den > 0:
+        return 0.0
+    return float(np.sqrt(np.median(np.einsum("ij,ij->i", R, R)) / 2.0) / den)

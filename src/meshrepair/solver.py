@@ -29,7 +29,7 @@ import numpy as np
 
 from . import _kernels as _k
 from ._memory import heap_allocations
-from .fidelity import prox_group_l1
+from .fidelity import prox_group_l1, tangential_anchor
 from .inner import INNER_SOLVERS, InnerState, VSubproblem, run_inner
 from .linear import N_SOLVERS, NormalSystem, solve_normals
 from .penalties import mc_penalty, t_update
@@ -206,6 +206,8 @@ class ADMMSolver:
         0 always smooth (Willmore), 1 always sharp (MC).
     fixed : (nV,) bool, optional, vertices that never move.
     flat_edges : (nE,) bool, optional, the edges of the flat-TV class (stages with ``flat_a``).
+    anchor : (nV,) float in [0, 1], optional, weight of the tangential anchor
+        (:func:`meshrepair.fidelity.tangential_anchor`) applied after every V-step.
     options : SolverOptions
     topo : Topology, optional (precomputed)
     """
@@ -213,7 +215,7 @@ class ADMMSolver:
     def __init__(self, F: np.ndarray, n_vertices: int, *, M_V: np.ndarray | None = None,
                  edge_force: np.ndarray | None = None, fixed: np.ndarray | None = None,
                  options: SolverOptions | None = None, topo: Topology | None = None,
-                 flat_edges: np.ndarray | None = None):
+                 flat_edges: np.ndarray | None = None, anchor: np.ndarray | None = None):
         self.options = options or SolverOptions()
         self.options.validate()
         self.F = np.asarray(F, dtype=np.int64)
@@ -224,6 +226,8 @@ class ADMMSolver:
                            else np.asarray(edge_force, dtype=np.int8))
         self.fixed = None if fixed is None else np.asarray(fixed, dtype=bool)
         self.flat_edges = None if flat_edges is None else np.asarray(flat_edges, dtype=bool)
+        self.anchor = (None if anchor is None or not np.any(anchor)
+                       else np.asarray(anchor, dtype=np.float64))
         self.vsub = VSubproblem(self.F, nV, fixed=self.fixed)
         self._relaxer: TangentialRelaxer | None = None  # built on first use (stage.relax > 0)
         # only interior edges carry a normal jump: t, rho1 live on them
@@ -367,6 +371,8 @@ class ADMMSolver:
                         Xd = X0
                     self.vsub.set(Xd, fid, z)
                     Vn = run_inner(o.inner_solver, self.vsub, V, o.inner_iters, state)
+                    if self.anchor is not None:
+                        Vn = tangential_anchor(Vn, X0, F, self.anchor)
                     if stage.relax > 0:
                         Vn = self.relaxer.step(Vn, sharp, stage.relax)
                     # (20)-(21) multipliers (D with the lengths of V^(k), as in the N-update)
@@ -424,4 +430,4 @@ class ADMMSolver:
         """A solver on the same connectivity with some options changed (reuses the topology)."""
         return ADMMSolver(self.F, self.topo.n_vertices, M_V=self.M_V, edge_force=self.edge_force,
                           fixed=self.fixed, options=replace(self.options, **changes),
-                          topo=self.topo, flat_edges=self.flat_edges)
+                          topo=self.topo, flat_edges=self.flat_edges, anchor=self.anchor)
