@@ -15,6 +15,7 @@ Usage::
     python benchmarks/published.py                 # all 7 triples
     python benchmarks/published.py --only kinect   # a subset (regex on the case name)
     python benchmarks/published.py --out table.md --json rows.json
+    python benchmarks/published.py --picture docs/img   # noisy | meshrepair | published | truth
 """
 
 from __future__ import annotations
@@ -81,6 +82,34 @@ def run(name: str, repeats: int = 1, kwargs: dict | None = None) -> dict:
     return row
 
 
+PICTURES = {  # case -> (file stem, camera azimuth, elevation)
+    "nllr_nicolo": ("published_organic_nicolo", 0.0, 0.0),
+    "nllr_igea": ("published_organic_igea", 0.0, 0.0),
+    "tgv_kinect_pyramid": ("published_scan_kinect", 0.0, 0.0),
+}
+
+
+def picture(name: str, folder: Path, size: int = 420) -> Path:
+    """noisy | meshrepair | published | truth for one triple, MSAE / E_a under each panel."""
+    from meshrepair import denoise, msae, read_mesh
+    from meshrepair.render import compare_figure
+
+    t = read_mesh(PUBLISHED / f"{name}__truth.ply")
+    n = read_mesh(PUBLISHED / f"{name}__noisy.ply")
+    p = read_mesh(PUBLISHED / f"{name}__published.ply")
+    r = denoise(n.V, t.F)
+    stem, az, el = PICTURES.get(name, (f"published_{name}", 0.0, 0.0))
+    Vs = [n.V, r.V, p.V, t.V]
+    metrics = [f"MSAE {msae(V, t.V, t.F):.1f}, E_a {mean_angle(V, t.V, t.F):.2f}°" for V in Vs]
+    method = {"tgv": "MeshTGV", "gcn": "GCN-Denoiser", "nllr": "NLLR"}[name.split("_")[0]]
+    out = folder / f"{stem}.png"
+    compare_figure([(V, t.F) for V in Vs], ["noisy", "meshrepair (defaults)",
+                                             f"published ({method})", "truth"],
+                   metrics=metrics, out_path=out, width=size, height=size, azimuth=az,
+                   elevation=el)
+    return out
+
+
 def markdown(rows: list[dict]) -> str:
     out = ["| case | nV | noisy MSAE / E_a | published MSAE / E_a | meshrepair MSAE / E_a | "
            "MSAE ratio | E_a ratio | E_V noisy | E_V published | E_V meshrepair | E_V ratio | "
@@ -108,6 +137,8 @@ def main(argv=None) -> None:
     ap.add_argument("--kwargs", default="{}", help="JSON dict passed to denoise (default: none)")
     ap.add_argument("--out", help="write the markdown table here")
     ap.add_argument("--json", help="write the rows as JSON here")
+    ap.add_argument("--picture", metavar="DIR",
+                    help="also render noisy | meshrepair | published | truth PNGs into DIR")
     args = ap.parse_args(argv)
     C.limit_threads(1)
     info = C.machine_info()
@@ -130,6 +161,10 @@ def main(argv=None) -> None:
         Path(args.out).write_text(md + "\n")
     if args.json:
         Path(args.json).write_text(json.dumps({"machine": info, "rows": rows}, indent=1))
+    if args.picture:
+        for n in names:
+            if n in PICTURES:
+                print("wrote", picture(n, Path(args.picture)))
 
 
 if __name__ == "__main__":

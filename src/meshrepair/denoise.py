@@ -188,17 +188,17 @@ def willmore_weight_from_scale(rho: float, impulsive: bool = False) -> float:
     """Weight ``w`` of edge-Willmore from the noise correlation ratio ρ of
     :func:`meshrepair.scale.noise_scale` (``ρ = 1`` for i.i.d. noise):
 
-    .. math:: w = \\mathrm{clip}(1 + 70(ρ - 1.12),\\, 1,\\, 8),
+    .. math:: w = \\mathrm{clip}(1 + 150(ρ - 1.12),\\, 1,\\, 16),
 
-    1 for white noise (ρ ≤ 1.12; the Gaussian inputs read 0.83-1.09), 8 for scanner-like noise
-    correlated over ≥ 2 rings (ρ ≥ 1.22; the real Kinect scan reads 1.23).
+    1 for white noise (ρ ≤ 1.12; the Gaussian inputs read 0.83-1.09), 16 for scanner-like noise
+    correlated over ≥ 2 rings (ρ ≥ 1.22; the real Kinect scan reads 1.21-1.23).
     The quadratic prior ``w ||DN||²`` against the coupling ``β2 ||N - 𝒩(V)||²`` smooths the
     normals over about ``√(w/β2)`` rings, so a larger ``w`` acts at the scale of the noise.
     Impulsive noise raises ρ through its isolated spikes, not through correlation: w = 1 there.
     """
     if impulsive:
         return 1.0
-    return float(np.clip(1.0 + 70.0 * (rho - 1.12), 1.0, 8.0))
+    return float(np.clip(1.0 + 150.0 * (rho - 1.12), 1.0, 16.0))
 
 
 def default_stages(*, robust_iters: int = 40, feature_iters: int = 60, a: float = 10.0,
@@ -348,8 +348,8 @@ def _denoise(V, F, *, lam, th, a, robust_iters, feature_iters, mask_update_every
     force = flat = anchor = None
     ww = 1.0 if willmore_weight is None else float(willmore_weight)
     if probe and stages[0].max_iter > 0:
-        st1 = replace(stages[0], max_iter=min(stages[0].max_iter, PROBE_MAX_ITERS),
-                      min_iter=min(stages[0].min_iter, PROBE_MAX_ITERS))
+        n1 = int(min(stages[0].max_iter, PROBE_MAX_ITERS))
+        st1 = replace(stages[0], max_iter=n1, min_iter=min(stages[0].min_iter, n1))
         r1 = ADMMSolver(Fw, len(V), options=SolverOptions(stages=(st1,), **opts_kw),
                         topo=topo_w).solve(Vw)
         sup = crease_support(topo_w, r1.N, th=th)
