@@ -194,7 +194,11 @@ def willmore_weight_from_scale(rho: float, impulsive: bool = False) -> float:
     correlated over ≥ 2 rings (ρ ≥ 1.22; the real Kinect scan reads 1.21-1.23).
     The quadratic prior ``w ||DN||²`` against the coupling ``β2 ||N - 𝒩(V)||²`` smooths the
     normals over about ``√(w/β2)`` rings, so a larger ``w`` acts at the scale of the noise.
-    Impulsive noise raises ρ through its isolated spikes, not through correlation: w = 1 there.
+    Impulsive noise raises ρ through its isolated spikes, and noise with a tangential part
+    (:func:`meshrepair.scale.tangential_ratio` ≥ 0.65) or at a low level on an irregular mesh
+    through the tangential residual and the curvature left in the reference, not through
+    correlation: w = 1 there (``impulsive=True``). Measured false positives without that test:
+    rocker_arm γ0.1 normal (r_t 1.13, ρ 1.28), spot / nicolo γ0.1 random (r_t 1.35 / 1.85).
     """
     if impulsive:
         return 1.0
@@ -362,7 +366,7 @@ def _denoise(V, F, *, lam, th, a, robust_iters, feature_iters, mask_update_every
         info["tangential_ratio"] = tr
         ns = noise_scale(V[pv] if reorder else V, Fw, reference=r1.V, topo=topo_w)
         if willmore_weight is None:
-            ww = willmore_weight_from_scale(ns.rho, impulsive)
+            ww = willmore_weight_from_scale(ns.rho, impulsive or tr >= TANGENTIAL_MAX)
         if lam is None and ww > 1.0:  # correlated noise: λ from its level at its own scale
             lam_used = lambda_from_noise(max(gamma, ns.gamma))
             opts_kw["lam"] = lam_used

@@ -44,8 +44,8 @@ def t_update_mixed(DN: np.ndarray, rho1: np.ndarray, sharp: np.ndarray, flat: np
     (nE, 3)
     """
     t = t_update(DN, rho1, sharp, a=a, beta1=beta1, willmore_weight=willmore_weight)
-    f = np.asarray(flat, bool) & ~np.asarray(sharp, bool)
-    if f.any():
+    f = np.flatnonzero(np.asarray(flat, bool) & ~np.asarray(sharp, bool))
+    if len(f):
         base = beta1 * DN[f] + rho1[f]
         t[f] = prox_mc(base / beta1, a_flat, beta1)
     return t

@@ -236,6 +236,8 @@ class ADMMSolver:
         self.fa = np.ascontiguousarray(self.topo.edge_faces[self.ie, 0])
         self.fb = np.ascontiguousarray(self.topo.edge_faces[self.ie, 1])
         self.nsys = NormalSystem(self.fa, self.fb, self.topo.n_faces)
+        self._flat_int = (None if self.flat_edges is None or not self.flat_edges.any()
+                          else self.flat_edges[self.ie])
 
     @property
     def relaxer(self) -> TangentialRelaxer:
@@ -346,9 +348,9 @@ class ADMMSolver:
                     sh = sharp[self.ie]
                     # (17) t-update
                     DN = _k.grad_edges(N, l, fa, fb)
-                    mixed = stage.flat_a > 0 and self.flat_edges is not None
+                    mixed = stage.flat_a > 0 and self._flat_int is not None
                     if mixed:
-                        fl = self.flat_edges[self.ie]
+                        fl = self._flat_int
                         t = t_update_mixed(DN, rho1, sh, fl, a=stage.a, a_flat=stage.flat_a,
                                            beta1=max(beta1, 1.01 * stage.flat_a),
                                            willmore_weight=o.willmore_weight)
@@ -383,12 +385,14 @@ class ADMMSolver:
                     V = Vn
                     l = _k.edge_lengths(V, E_int)
                     k += 1
-                    if mixed:
-                        reg = reg_energy_mixed(_k.grad_edges(Nv, l, fa, fb), sh, fl, a=stage.a,
-                                               a_flat=stage.flat_a,
-                                               willmore_weight=o.willmore_weight)
-                    else:
-                        reg = _k.reg_energy(Nv, l, fa, fb, sh, stage.a, o.willmore_weight)
+                    reg = _k.reg_energy(Nv, l, fa, fb, sh, stage.a, o.willmore_weight)
+                    if mixed:  # flat-TV edges: replace their Willmore value by the MC value
+                        f = np.flatnonzero(fl & ~sh)
+                        tf = l[f, None] * (Nv[fa[f]] - Nv[fb[f]])
+                        reg += reg_energy_mixed(tf, np.zeros(len(f), bool), np.ones(len(f), bool),
+                                                a=stage.a, a_flat=stage.flat_a,
+                                                willmore_weight=o.willmore_weight)
+                        reg -= o.willmore_weight * float(np.einsum("ij,ij->", tf, tf))
                     entry = {
                         "iter": k,
                         "stage": stage.name,
