@@ -160,6 +160,7 @@ crease-supported region gets the tangential anchor of
 :func:`meshrepair.fidelity.tangential_anchor`."""
 
 PROBE_MAX_ITERS = 120
+PROBE_EARLY_STOP = True
 """Cap of the robust probe that decides the crease-supported region."""
 
 FLAT_SPREAD_DEFAULT = 7.0
@@ -184,12 +185,6 @@ def huber_from_noise(gamma: float, gamma_rms: float) -> float:
     return 2.0 * gamma_rms if is_impulsive(gamma, gamma_rms) else 0.0
 
 
-RHO_STRONG = 1.35
-"""A correlation ratio this high is taken as correlated noise whatever its direction: the
-false positives measured (low noise on irregular meshes, random directions) read at most 1.28,
-synthetic correlated noise 1.41-2.35."""
-
-
 def willmore_weight_from_scale(rho: float, impulsive: bool = False,
                                tangential: float = 0.0) -> float:
     """Weight ``w`` of edge-Willmore from the noise correlation ratio ρ of
@@ -203,13 +198,14 @@ def willmore_weight_from_scale(rho: float, impulsive: bool = False,
     normals over about ``√(w/β2)`` rings, so a larger ``w`` acts at the scale of the noise.
     Impulsive noise raises ρ through its isolated spikes (w = 1), and so do noise with a
     tangential part and low noise on an irregular mesh (the tangential residual and the
-    curvature left in the reference): below ``RHO_STRONG`` the weight is raised only when the
-    noise lies along the normals, ``tangential`` (:func:`meshrepair.scale.tangential_ratio`)
-    < 0.65. Measured false positives without that test: rocker_arm γ0.1 normal (r_t 1.13,
-    ρ 1.28), spot / nicolo γ0.1 random (r_t 1.35 / 1.85, ρ 1.23 / 1.22); the real Kinect scan
-    reads ρ 1.22 with r_t 0.34.
+    curvature left in the reference): the weight is raised only when the noise lies along the
+    normals, ``tangential`` (:func:`meshrepair.scale.tangential_ratio`) < 0.65. Measured false
+    positives without that test: rocker_arm γ0.1 normal (r_t 1.13, ρ 1.28), rocker_arm γ0.1
+    random (r_t 2.22, ρ 1.35), spot / nicolo γ0.1 random (r_t 1.35 / 1.85, ρ 1.23 / 1.22); the
+    real Kinect scan reads ρ 1.22 with r_t 0.34. Smooth synthetic correlated noise can read
+    r_t ≥ 0.65 (its high-passed normal part is small) and is then missed (docs/parameters.md).
     """
-    if impulsive or (rho < RHO_STRONG and tangential >= TANGENTIAL_MAX):
+    if impulsive or tangential >= TANGENTIAL_MAX:
         return 1.0
     return float(np.clip(1.0 + 150.0 * (rho - 1.12), 1.0, 16.0))
 
@@ -363,7 +359,9 @@ def _denoise(V, F, *, lam, th, a, robust_iters, feature_iters, mask_update_every
     if probe and stages[0].max_iter > 0:
         n1 = int(min(stages[0].max_iter, PROBE_MAX_ITERS))
         st1 = replace(stages[0], max_iter=n1, min_iter=min(stages[0].min_iter, n1))
-        r1 = ADMMSolver(Fw, len(V), options=SolverOptions(stages=(st1,), **opts_kw),
+        # the probe is a one-stage run: its stage's switch rule becomes the stopping rule
+        kw1 = {**opts_kw, "tol": st1.switch_tol if PROBE_EARLY_STOP else opts_kw["tol"]}
+        r1 = ADMMSolver(Fw, len(V), options=SolverOptions(stages=(st1,), **kw1),
                         topo=topo_w).solve(Vw)
         sup = crease_support(topo_w, r1.N, th=th)
         force = np.where(sup, -1, 0).astype(np.int8)
