@@ -1,25 +1,32 @@
 """Feature-aware denoising: the public one-shot function over the shared ADMM solver.
 
-Default schedule (see docs/parameters.md for the measurements behind it):
+Default schedule (docs/parameters.md has the measurements behind every rule; the decisions are
+recorded in ``DenoiseResult.params``):
 
-0. *Unfold*: faces folded over by noise with a tangential part are unfolded by local umbrella
-   smoothing of their 1-ring (:func:`meshrepair.relax.untangle`); nothing else moves.
-1. *Robust stage*: the MC penalty on every edge with a small non-convexity ``a = 0.5``
-   (ℓ1-like, a total-variation smoother of the normal field), ``β1 = 2a``, ``β2 = 10 β1``; at most
-   ``clip(130 γ̂, 10, 40)`` iterations (40 when the noise folded faces over), left early when the
-   relative change of V drops below ``2e-4``. A mask taken from
-   the noisy input would freeze the noise in (40 % of edges look sharp at γ = 0.3); after this
-   stage the dihedral mask is close to the true one.
-2. *Feature stage*: M_E from the dihedral threshold ``th`` on the current normal field, refreshed
-   every 3 iterations and cleaned of sharp-edge chains shorter than 6 edges (real creases are
-   long lines, residual noise is not), ``a = 10`` (ℓ0-like on sharp edges, crisp creases),
-   edge-Willmore on the others, ``β1 = 1.2 a``, ``β2 ≈ 1.67 β1``; at most 60 iterations or
-   rule (35).
+0. *Unfold* faces folded over by noise (:func:`meshrepair.relax.untangle`).
+1. *Probe*: the robust stage below on the whole mesh (MC with ``a = 0.5`` on every edge, a
+   total-variation-like smoother of the normals). Its result N¹ decides:
 
-λ is set from the estimated noise level γ̂ (:func:`meshrepair.noise.estimate_noise`):
-``λ = clip(0.02 / γ̂², 0.05, 1)``: little noise keeps the data, strong noise trusts the prior.
-All parameters are in mean-edge-length units, so the result is equivariant under rotation,
-translation and uniform scaling.
+   * the *crease-supported region* C (:func:`meshrepair.regions.crease_support`): long chains
+     (≥ 30 edges) of edges whose N¹-dihedral exceeds ``th``, dilated by 2 rings;
+   * the *flat edges* of C (:func:`meshrepair.regions.flat_edges`, probe normal spread < 7°);
+   * the *noise scale* (:func:`meshrepair.scale.noise_scale`): correlation ratio ρ, length, level;
+   * the *direction* of the noise (:func:`meshrepair.scale.tangential_ratio` r_t).
+
+2. *Robust stage* from the input again: MC (``a = 0.5``, 0.25 for heavy noise γ̂ > 0.33) on C,
+   edge-Willmore elsewhere; ``β1 = 2a``, ``β2 = 10 β1``; ``clip(130 γ̂, 10, 40)`` iterations
+   (40 with fold-overs; ``40 + 600 (γ̂ - 0.33)`` up to 120 for heavy noise), left early when the
+   relative change of V drops below ``2e-4``.
+3. *Feature stage*: in C, M_E from the dihedral threshold (refreshed every 3 iterations, chains
+   ≥ 6 edges) with ``a = 10``, and the flat-TV class (:mod:`meshrepair.priors`, MC ``a = 0.5``)
+   on C's flat edges; edge-Willmore elsewhere; ``β1 = 1.2 a``, ``β2 ≈ 1.67 β1``; ≤ 60
+   iterations or rule (35).
+
+Throughout: λ = ``clip(0.02 / γ̂², 0.05, 1)``; the Willmore weight ``w`` from ρ for correlated
+noise along the normals (:func:`willmore_weight_from_scale`); a Huber fidelity for impulsive
+noise (:mod:`meshrepair.fidelity`); a tangential anchor on C when the noise lies along the
+normals (r_t < 0.65). All parameters are in mean-edge-length units, so the result is
+equivariant under rotation, translation and uniform scaling.
 """
 
 from __future__ import annotations
