@@ -278,8 +278,9 @@ def denoise(
     willmore_weight : weight of edge-Willmore on smooth edges; default from the correlation of
         the noise (:func:`willmore_weight_from_scale`).
     regions : decide per region whether a crease is supported (:mod:`meshrepair.regions`) from a
-        first robust probe, and use the smooth prior only elsewhere; ``False`` gives the
-        previous schedule (MC stages on the whole mesh).
+        first robust probe, and use the smooth prior only elsewhere; ``False`` runs the MC stages
+        on the whole mesh without probe, flat-TV class, anchor or correlated-noise weight (the
+        heavy-noise and impulsive rules still apply).
     callback : called with each iteration's history entry; raise
         :class:`meshrepair.solver.StopRequested` to stop early.
 
