@@ -324,7 +324,7 @@ def test_cli_render(tmp_path):
     # per-vertex values from a .npy file
     npy = tmp_path / "h.npy"
     np.save(npy, V[:, 1])
-    args = _parser().parse_args(["render", str(src), str(out), "--color", str(npy)])
+    args = _parser().parse_args(["render", str(src), str(out), "--color", str(npy), "--force"])
     assert args.func(args) == 0
 
 
@@ -361,6 +361,6 @@ def test_cli_compare_with_reference(tmp_path, capsys):
     m = reference_metrics(noisy, F, V)
     assert m["MSAE"] > 0 and m["E_V"] == pytest.approx(np.linalg.norm(noisy - V) / len(V))
     assert reference_metrics(V, F, V) == pytest.approx({"MSAE": 0.0, "E_V": 0.0}, abs=1e-9)
-    args = _parser().parse_args(["compare", paths[0], str(out), "--titles", "a", "b"])
+    args = _parser().parse_args(["compare", paths[0], str(out), "--titles", "a", "b", "--force"])
     with pytest.raises(MeshRepairError, match="titles"):
         args.func(args)

@@ -27,7 +27,6 @@ from __future__ import annotations
 import logging
 import os
 import re
-import secrets
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -35,6 +34,7 @@ from typing import Any
 
 import numpy as np
 
+from .atomic import atomic_write, check_writable
 from .errors import MeshRepairError
 from .validate import _as_face_array, _as_vertex_array
 
@@ -671,9 +671,7 @@ def write_mesh(
     if ext not in _READERS:
         raise MeshRepairError(f"cannot write '{p}': unsupported file extension "
                               f"{ext or '(none)'!r} (supported: {', '.join(SUPPORTED_FORMATS)})")
-    if not overwrite and p.exists():
-        raise MeshRepairError(f"cannot write '{p}': file exists (pass overwrite=True to "
-                              "replace it)")
+    check_writable(p, overwrite=overwrite)
     Vf = _as_vertex_array(V, f"cannot write '{p}'")
     Fi = _as_face_array(F, f"cannot write '{p}'")
     if Fi.size == 0:
@@ -704,36 +702,23 @@ def write_mesh(
         if vertex_attributes:
             logger.warning("%s: vertex attributes %s are not stored in %s files (use PLY)", p,
                            sorted(vertex_attributes), ext)
-    if not p.parent.is_dir():
-        raise MeshRepairError(f"cannot write '{p}': directory '{p.parent}' does not exist")
-
-    tmp = p.parent / f".{p.name}.{os.getpid()}.{secrets.token_hex(4)}.tmp"
-    try:
-        fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL | getattr(os, "O_BINARY", 0),
-                     0o666)
-        with os.fdopen(fd, "wb") as fh:
-            if ext == ".ply":
-                _write_ply(fh, Vf, Fi, attrs, binary)
-            elif ext == ".stl":
-                _write_stl(fh, Vf, Fi, binary, p)
-            elif ext == ".obj":
-                fh.write(b"# written by meshrepair\n")
-                if nV:
-                    np.savetxt(fh, Vf, fmt="v %.17g %.17g %.17g")
-                if len(Fi):
-                    np.savetxt(fh, Fi + 1, fmt="f %d %d %d")
-            else:  # .off
-                fh.write(f"OFF\n{nV} {len(Fi)} 0\n".encode("ascii"))
-                if nV:
-                    np.savetxt(fh, Vf, fmt="%.17g %.17g %.17g")
-                if len(Fi):
-                    np.savetxt(fh, Fi, fmt="3 %d %d %d")
-        os.replace(tmp, p)
-    except OSError as exc:
-        raise MeshRepairError(f"cannot write '{p}': {exc.strerror or exc}") from None
-    finally:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
+    with atomic_write(p, "wb", overwrite=overwrite) as fh:
+        if ext == ".ply":
+            _write_ply(fh, Vf, Fi, attrs, binary)
+        elif ext == ".stl":
+            _write_stl(fh, Vf, Fi, binary, p)
+        elif ext == ".obj":
+            fh.write(b"# written by meshrepair\n")
+            if nV:
+                np.savetxt(fh, Vf, fmt="v %.17g %.17g %.17g")
+            if len(Fi):
+                np.savetxt(fh, Fi + 1, fmt="f %d %d %d")
+        else:  # .off
+            fh.write(f"OFF\n{nV} {len(Fi)} 0\n".encode("ascii"))
+            if nV:
+                np.savetxt(fh, Vf, fmt="%.17g %.17g %.17g")
+            if len(Fi):
+                np.savetxt(fh, Fi, fmt="3 %d %d %d")
     logger.debug("wrote %s: %d vertices, %d faces", p, nV, len(Fi))
     return p
 

@@ -664,14 +664,16 @@ def _face_highlight(F: np.ndarray, nV: int, region_mask: np.ndarray | None) -> n
     )
 
 
-def save_png(path: str | os.PathLike, image: np.ndarray) -> Path:
-    """Write an image as PNG.
+def save_png(path: str | os.PathLike, image: np.ndarray, *, overwrite: bool = True) -> Path:
+    """Write an image as PNG, atomically (:func:`meshrepair.atomic.atomic_write`).
 
     Parameters
     ----------
     path : str or path-like
         Output file (parent directories are created).
     image : (H, W, 3) or (H, W, 4) uint8, or float in [0, 1]
+    overwrite : bool
+        If False, refuse to replace an existing file.
 
     Returns
     -------
@@ -687,9 +689,11 @@ def save_png(path: str | os.PathLike, image: np.ndarray) -> Path:
         if not np.issubdtype(img.dtype, np.floating):
             raise MeshRepairError(f"image must be uint8 or float in [0, 1], got {img.dtype}")
         img = _to_uint8(img)
+    from .atomic import atomic_write
+
     p = Path(path)
-    p.parent.mkdir(parents=True, exist_ok=True)
-    imsave(p, img, format="png")
+    with atomic_write(p, "wb", overwrite=overwrite, make_parents=True) as fh:
+        imsave(fh, img, format="png")
     log.info("wrote %s (%d x %d)", p, img.shape[1], img.shape[0])
     return p
 
@@ -714,6 +718,7 @@ def compare_figure(
     metrics: Sequence[str] | None = None,
     out_path: str | os.PathLike | None = None,
     fit: str = "union",
+    overwrite: bool = True,
     **render_kw,
 ) -> np.ndarray:
     """Paper-style comparison: several meshes in one row, same camera, one colour range.
@@ -727,6 +732,8 @@ def compare_figure(
         One text per mesh (may contain newlines), drawn below its panel.
     out_path : path, optional
         Where to save the PNG.
+    overwrite : bool
+        If False, refuse to replace an existing ``out_path``.
     fit : {"union", "first"}
         Fit the common camera to the union of all bounding boxes or to the first mesh's.
     **render_kw
@@ -828,7 +835,7 @@ def compare_figure(
         )  # fmt: skip
     img = _figure_to_array(fig)
     if out_path is not None:
-        save_png(out_path, img)
+        save_png(out_path, img, overwrite=overwrite)
     return img
 
 

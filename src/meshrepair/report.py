@@ -298,6 +298,7 @@ def write_report(
     image_size: int = 480,
     azimuth: float | None = None,
     elevation: float | None = None,
+    overwrite: bool = True,
 ) -> Path:
     """Write a self-contained HTML report (images embedded, no external files or scripts).
 
@@ -327,6 +328,8 @@ def write_report(
         Size in pixels of each mesh panel.
     azimuth, elevation : float, optional
         Camera angles for every render (see :func:`meshrepair.render.render_mesh`).
+    overwrite : bool
+        If False, refuse to replace an existing file. The page is written atomically.
 
     Returns
     -------
@@ -424,9 +427,11 @@ def write_report(
             "",
         ]
     )
+    from .atomic import atomic_write
+
     p = Path(path)
-    p.parent.mkdir(parents=True, exist_ok=True)
-    p.write_text(page, encoding="utf-8")
+    with atomic_write(p, "w", overwrite=overwrite, make_parents=True) as fh:
+        fh.write(page)
     log.info("wrote report %s (%.1f kB)", p, len(page) / 1024)
     return p
 

@@ -11,7 +11,6 @@ Examples
 from __future__ import annotations
 
 import argparse
-import json
 import logging
 import time
 from pathlib import Path
@@ -64,21 +63,15 @@ def _selection(path: str, V: np.ndarray, F: np.ndarray) -> dict:
     return {"region": read_face_selection(path, len(F))}
 
 
-def _check_output(out: str, inputs: list[str | None], force: bool) -> Path:
-    from .common import output_path
-
-    return output_path(out, inputs, force=force)
-
-
 def run_complete(args: argparse.Namespace) -> int:
     """Handler of ``meshrepair complete``; returns the exit code."""
     from ..complete import complete, extract_patch
     from ..io import read_mesh, write_mesh
+    from .common import run_outputs, write_json_log
 
-    out = _check_output(args.output, [args.input, args.template, args.region, args.transform,
-                                      args.template_region, args.log], args.force)
-    if args.log is not None and Path(args.log).suffix.lower() != ".json":
-        raise MeshRepairError(f"--log {args.log!r} must be a .json file")
+    out, log_path, report_path = run_outputs(
+        args, [args.input, args.template, args.region, args.transform, args.template_region],
+        output=args.output)
     t0 = time.perf_counter()
     mesh = read_mesh(args.input)
     tmesh = read_mesh(args.template)
@@ -112,9 +105,9 @@ def run_complete(args: argparse.Namespace) -> int:
         tmpl = np.zeros(nV, np.uint8)
         tmpl[res.template_vertices] = 1
         attrs = {"m_v": res.M_V.astype(np.float32), "strip": strip, "template": tmpl}
-    write_mesh(out, res.V, res.F, vertex_attributes=attrs, overwrite=True)
+    write_mesh(out, res.V, res.F, vertex_attributes=attrs, overwrite=args.force)
     c = res.correspondence
-    if args.log is not None:
+    if log_path is not None:
         corr = {k: (v.tolist() if isinstance(v, np.ndarray) else v) for k, v in c.items()}
         run = {
             "history": res.history,
@@ -127,7 +120,7 @@ def run_complete(args: argparse.Namespace) -> int:
                         int(len(res.strip_vertices)), "iterations": res.iterations},
             "correspondence": corr,
         }
-        Path(args.log).write_text(json.dumps(run, indent=1), encoding="utf-8")
+        write_json_log(log_path, run, force=args.force)
     print(f"wrote {out}: {len(res.V)} vertices, {len(res.F)} faces; seam {c['n_seam']} vertices "
           f"(hole {c['n_hole']}, template {c['n_template']}), boundary RMS {c['rms_before']:.3g} "
           f"-> {c['rms_after']:.3g}, {res.iterations} iterations "
@@ -135,7 +128,7 @@ def run_complete(args: argparse.Namespace) -> int:
     from .common import write_run_report
 
     write_run_report(
-        args.report, title=f"meshrepair complete {Path(args.input).name}",
+        report_path, force=args.force, title=f"meshrepair complete {Path(args.input).name}",
         input_mesh=(mesh.V, mesh.F), output_mesh=(res.V, res.F),
         masks={"M_V": res.M_V, "M_E": res.M_E}, history=res.history, parameters=res.params,
         metrics={"seam vertices": c["n_seam"], "rms boundary before": c["rms_before"],

@@ -11,16 +11,17 @@ from pathlib import Path
 
 import numpy as np
 
-from .common import ProgressBar, output_path
+from ..errors import MeshRepairError
+from .common import ProgressBar, output_path, run_outputs, write_json_log
 
 log = logging.getLogger(__name__)
 
 
-def _write_history(path: str | None, result, extra: dict) -> None:
-    if not path:
+def _write_history(path: Path | None, result, extra: dict, force: bool) -> None:
+    if path is None:
         return
     data = {"history": result.history, "parameters": result.params, **extra}
-    Path(path).write_text(json.dumps(data, indent=1, default=float))
+    write_json_log(path, data, force=force)
 
 
 def run_denoise(args: argparse.Namespace) -> int:
@@ -28,7 +29,7 @@ def run_denoise(args: argparse.Namespace) -> int:
     from ..io import read_mesh, write_mesh
     from ..solver import StopRequested
 
-    out = output_path(args.output, [args.input], force=args.force)
+    out, log_path, report_path = run_outputs(args, [args.input], output=args.output)
     m = read_mesh(args.input)
     total = (args.robust_iters if args.robust_iters is not None else 40) + args.feature_iters
     bar = ProgressBar(total, "denoise", enabled=not args.quiet)
@@ -57,23 +58,23 @@ def run_denoise(args: argparse.Namespace) -> int:
         sharp_v = np.zeros(len(r.V), np.uint8)
         sharp_v[r.edges[r.M_E].ravel()] = 1
         attrs["sharp"] = sharp_v
-    write_mesh(out, r.V, r.F, vertex_attributes=attrs or None)
-    _write_history(args.log, r, {"seconds": dt})
+    write_mesh(out, r.V, r.F, vertex_attributes=attrs or None, overwrite=args.force)
+    _write_history(log_path, r, {"seconds": dt}, args.force)
     print(f"denoised {len(r.V)} vertices in {r.iterations} iterations ({dt:.2f} s, "
           f"{r.stop_reason}); noise estimate gamma={r.noise_estimate:.3f}, lambda="
           f"{r.params['lam']:.3g}, sharp edges {int(r.M_E.sum())}/{len(r.M_E)}")
     if r.stop_reason == "interrupted":
         print("interrupted: wrote the current iterate", file=sys.stderr)
     print(f"wrote {out}")
-    if args.report:
+    if report_path is not None:
         from ..report import write_report
 
-        write_report(args.report, title=f"meshrepair denoise {Path(args.input).name}",
+        write_report(report_path, title=f"meshrepair denoise {Path(args.input).name}",
                      input_mesh=(m.V, m.F), output_mesh=(r.V, r.F),
                      masks={"M_E": r.M_E}, history=r.history, parameters=r.params,
                      metrics={"noise estimate": r.noise_estimate, "iterations": r.iterations},
-                     timings={"total s": dt})
-        print(f"wrote {args.report}")
+                     timings={"total s": dt}, overwrite=args.force)
+        print(f"wrote {report_path}")
     return 0
 
 
@@ -84,7 +85,7 @@ def run_noise(args: argparse.Namespace) -> int:
     out = output_path(args.output, [args.input], force=args.force)
     m = read_mesh(args.input)
     Vn = add_noise(m.V, m.F, args.gamma, direction=args.direction, seed=args.seed)
-    write_mesh(out, Vn, m.F)
+    write_mesh(out, Vn, m.F, overwrite=args.force)
     print(f"added noise gamma={args.gamma} ({args.direction}, seed {args.seed}); wrote {out}")
     return 0
 
@@ -127,11 +128,28 @@ def run_demo(args: argparse.Namespace) -> int:
     from ..metrics import msae, vertex_error
 
     data = files("meshrepair") / "data"
+    outdir = Path(args.outdir)
+    out, png = outdir / "fandisk_denoised.ply", outdir / "fandisk_demo.png"
+    try:
+        exists, is_dir = outdir.exists(), outdir.is_dir()
+    except OSError as exc:
+        raise MeshRepairError(f"--outdir {str(outdir)!r}: {exc.strerror or exc}") from None
+    if exists and not is_dir:
+        raise MeshRepairError(f"--outdir {str(outdir)!r} exists and is not a folder")
+    if exists:  # a second run: the same rule as every output file (no overwrite without --force)
+        try:
+            for f in (out,) if args.no_render else (out, png):
+                output_path(f, [], force=args.force, suffixes=(f.suffix,))
+        except MeshRepairError as exc:
+            raise MeshRepairError(f"{exc} (from an earlier demo run? or choose another "
+                                  "--outdir)") from None
     noisy = read_mesh(str(data / "fandisk_noisy.ply"))
     truth = read_mesh(str(data / "fandisk.ply"))
-    outdir = Path(args.outdir)
-    outdir.mkdir(parents=True, exist_ok=True)
-    out = outdir / "fandisk_denoised.ply"
+    try:
+        outdir.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise MeshRepairError(f"cannot create --outdir {str(outdir)!r}: "
+                              f"{exc.strerror or exc}") from None
     print("meshrepair demo: feature-aware denoising of the fandisk CAD part")
     print("  input: published noisy fandisk (Gaussian noise, 0.3 mean edge lengths), "
           f"{len(noisy.V)} vertices")
@@ -140,7 +158,7 @@ def run_demo(args: argparse.Namespace) -> int:
     r = denoise(noisy.V, noisy.F, callback=bar)
     bar.close()
     dt = time.perf_counter() - t0
-    write_mesh(out, r.V, r.F)
+    write_mesh(out, r.V, r.F, overwrite=args.force)
     m0, m1 = msae(noisy.V, truth.V, truth.F), msae(r.V, truth.V, truth.F)
     e0, e1 = vertex_error(noisy.V, truth.V), vertex_error(r.V, truth.V)
     print(f"  {'':10s} {'MSAE (deg^2)':>14s} {'E_V':>12s}")
@@ -152,11 +170,11 @@ def run_demo(args: argparse.Namespace) -> int:
         try:
             from ..render import compare_figure
 
-            png = outdir / "fandisk_demo.png"
             compare_figure([(noisy.V, noisy.F), (r.V, r.F), (truth.V, truth.F)],
                            ["noisy", "meshrepair", "ground truth"],
                            metrics=[f"MSAE {m0:.1f}", f"MSAE {m1:.1f}", ""],
-                           out_path=png, azimuth=35, elevation=25, width=400, height=400)
+                           out_path=png, azimuth=35, elevation=25, width=400, height=400,
+                           overwrite=args.force)
             print(f"  wrote {png}")
         except Exception as exc:  # the picture is a bonus; never fail the demo on it
             log.warning("could not render the demo picture: %s", exc)
@@ -212,7 +230,10 @@ def register(subparsers) -> None:
     p = subparsers.add_parser("demo", help="denoise the bundled noisy fandisk and print errors",
                               description="Runs the default denoiser on a bundled noisy CAD part "
                                           "and prints MSAE/E_V before and after.")
-    p.add_argument("--outdir", default="meshrepair-demo", help="where to write the results")
+    p.add_argument("--outdir", default="meshrepair-demo",
+                   help="folder for the results (created if missing; default: %(default)s)")
     p.add_argument("--no-render", action="store_true", help="skip the PNG figure")
+    p.add_argument("--force", action="store_true",
+                   help="overwrite the results of an earlier run in --outdir")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
     p.set_defaults(func=run_demo)

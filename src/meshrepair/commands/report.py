@@ -69,7 +69,8 @@ def run_report(args: argparse.Namespace) -> int:
     from ..topology import boundary_loops
 
     out = check_output_path(
-        args.output, [args.result, args.input, args.reference, args.log], (".html", ".htm")
+        args.output, [args.result, args.input, args.reference, args.log], (".html", ".htm"),
+        args.force,
     )
     t0 = time.perf_counter()
     res = load_mesh(args.result)
@@ -127,6 +128,7 @@ def run_report(args: argparse.Namespace) -> int:
         parameters=parameters,
         timings=timings,
         image_size=args.image_size,
+        overwrite=args.force,
     )
     print(f"wrote {out} ({time.perf_counter() - t0:.2f} s)")
     return 0
@@ -153,4 +155,5 @@ def register(subparsers) -> None:
                    help="dihedral angle for the sharp-edge mask M_E (default 30)")
     p.add_argument("--image-size", type=int, default=480, metavar="PX",
                    help="size of each rendered panel (default 480)")
+    p.add_argument("--force", action="store_true", help="overwrite OUTPUT if it exists")
     p.set_defaults(func=run_report)
