@@ -31,9 +31,9 @@ def read_face_selection(path: str | Path, n_faces: int) -> np.ndarray:
     -------
     (k,) int64, sorted unique face indices in ``[0, n_faces)``
     """
-    p = Path(path)
-    if not p.is_file():
-        raise MeshRepairError(f"region file {str(p)!r} does not exist; check the path")
+    from ..io import check_input_file
+
+    p = check_input_file(path, "region ")
     try:
         text = p.read_text(encoding="utf-8")
     except (OSError, UnicodeDecodeError) as exc:

@@ -41,8 +41,13 @@ class LoadedMesh:
 def load_mesh(path: str | os.PathLike) -> LoadedMesh:
     """Read a triangle mesh with :func:`meshrepair.io.read_mesh` (trimesh if that is missing)."""
     p = Path(path)
-    if not p.is_file():
-        raise MeshRepairError(f"mesh file {str(p)!r} does not exist; check the path")
+    try:
+        from ..io import check_input_file
+
+        check_input_file(p)
+    except ImportError:  # meshrepair.io not available
+        if not p.is_file():
+            raise MeshRepairError(f"mesh file {str(p)!r} does not exist; check the path") from None
     try:
         from ..io import read_mesh
     except ImportError:  # meshrepair.io not available: fall back to trimesh
@@ -92,9 +97,9 @@ def _color_options(color: str, mesh: LoadedMesh) -> dict:
     if color in ("curvature", "none"):
         return {"color_by": color}
     if color.lower().endswith(".npy"):
-        p = Path(color)
-        if not p.is_file():
-            raise MeshRepairError(f"--color file {color!r} does not exist")
+        from ..io import check_input_file
+
+        p = check_input_file(color, "--color ")
         try:
             s = np.load(p, allow_pickle=False)
         except (OSError, ValueError) as exc:

@@ -26,9 +26,9 @@ def _load_log(path: str | None) -> dict:
     ``history``, ``parameters``, ``timings``, ``metrics``."""
     if path is None:
         return {}
-    p = Path(path)
-    if not p.is_file():
-        raise MeshRepairError(f"--log file {path!r} does not exist")
+    from ..io import check_input_file
+
+    p = check_input_file(path, "--log ")
     try:
         data = json.loads(p.read_text(encoding="utf-8"))
     except (OSError, ValueError) as exc:
