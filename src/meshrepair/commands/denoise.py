@@ -191,18 +191,24 @@ def register(subparsers) -> None:
     p.add_argument("output", help="result mesh (.ply recommended); never the input file")
     p.add_argument("--lam", type=float, default=None,
                    help="fidelity weight lambda (default: from the estimated noise level)")
-    p.add_argument("--th", type=float, default=30.0, help="sharp-edge dihedral threshold, degrees")
+    p.add_argument("--th", type=float, default=30.0, metavar="DEG",
+                   help="sharp-edge dihedral threshold in degrees, in (0, 180)")
     p.add_argument("--robust-iters", type=int, default=None,
                    help="cap of the robust stage (default: 10-40 from the estimated noise)")
-    p.add_argument("--feature-iters", type=int, default=60, help="cap of the feature stage")
-    p.add_argument("--tol", type=float, default=1e-6, help="stopping rule (35) tolerance")
+    p.add_argument("--feature-iters", type=int, default=60, metavar="N",
+                   help="cap of the feature stage (iterations, >= 0)")
+    p.add_argument("--tol", type=float, default=1e-6,
+                   help="tolerance of the stopping rule (35) on the relative change, > 0")
     p.add_argument("--inner-solver", default="armijo",
-                   choices=["armijo", "gd", "heavy_ball", "lbfgs", "bfgs"])
-    p.add_argument("--n-solver", default="auto", choices=["auto", "cg", "direct"])
+                   choices=["armijo", "gd", "heavy_ball", "lbfgs", "bfgs"],
+                   help="solver of the V-subproblem (26)")
+    p.add_argument("--n-solver", default="auto", choices=["auto", "cg", "direct"],
+                   help="N-subproblem (25) solver: block PCG, sparse direct, or chosen by size")
     p.add_argument("--save-mask", action="store_true",
                    help="store a per-vertex 'sharp' attribute (vertices on sharp edges) in the PLY")
-    p.add_argument("--log", help="write the iteration history and parameters as JSON")
-    p.add_argument("--report", help="write a self-contained HTML report")
+    p.add_argument("--log", metavar="RUN.json",
+                   help="write the iteration history and parameters as JSON")
+    p.add_argument("--report", metavar="OUT.html", help="write a self-contained HTML report")
     p.add_argument("--save-on-interrupt", action="store_true",
                    help="on Ctrl-C, write the current iterate instead of nothing")
     p.add_argument("--force", action="store_true", help="overwrite OUTPUT if it exists")
@@ -211,20 +217,22 @@ def register(subparsers) -> None:
 
     p = subparsers.add_parser("noise", help="add the paper's noise model (32) to a mesh",
                               description="V0 = V + eta*d, eta ~ N(0, (gamma*mean edge)^2).")
-    p.add_argument("input")
-    p.add_argument("output")
-    p.add_argument("--gamma", type=float, default=0.3, help="noise level in mean edge lengths")
-    p.add_argument("--direction", choices=["normal", "random"], default="normal")
-    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("input", help="clean mesh (.ply .obj .off .stl)")
+    p.add_argument("output", help="noisy mesh to write; never the input file")
+    p.add_argument("--gamma", type=float, default=0.3,
+                   help="noise level in mean edge lengths, >= 0")
+    p.add_argument("--direction", choices=["normal", "random"], default="normal",
+                   help="displace along the vertex normals or in random directions")
+    p.add_argument("--seed", type=int, default=0, help="random seed")
     p.add_argument("--force", action="store_true", help="overwrite OUTPUT if it exists")
     p.set_defaults(func=run_noise)
 
     p = subparsers.add_parser("metrics", help="MSAE, E_V and surface distances to a reference",
                               description="Compare RESULT with REFERENCE. MSAE (33) and E_V (34) "
                                           "need the same connectivity; distances do not.")
-    p.add_argument("result")
-    p.add_argument("reference")
-    p.add_argument("--json", action="store_true", help="print JSON")
+    p.add_argument("result", help="mesh to evaluate (e.g. a denoised mesh)")
+    p.add_argument("reference", help="ground-truth mesh (same connectivity for MSAE and E_V)")
+    p.add_argument("--json", action="store_true", help="print JSON instead of a table")
     p.set_defaults(func=run_metrics)
 
     p = subparsers.add_parser("demo", help="denoise the bundled noisy fandisk and print errors",
