@@ -214,16 +214,28 @@ def denoise(
 def _denoise(V, F, *, lam, th, a, robust_iters, feature_iters, mask_update_every,
              min_feature_edges, tol, unfold, inner_solver, inner_iters, n_solver, stages,
              callback) -> DenoiseResult:
+    from .options import check_bool, check_int, check_number
     from .validate import _check_mesh
 
+    # every option first (finite, in range), before any work on the mesh
+    lam = check_number("lam", lam, low=0, allow_none=True)
+    a = check_number("a", a, low=0, low_open=True)
+    robust_iters = check_int("robust_iters", robust_iters, low=0, allow_none=True)
+    feature_iters = check_int("feature_iters", feature_iters, low=0)
+    mask_update_every = check_int("mask_update_every", mask_update_every, low=0)
+    min_feature_edges = check_int("min_feature_edges", min_feature_edges, low=1)
+    inner_iters = check_int("inner_iters", inner_iters, low=1)
+    tol = check_number("tol", tol, low=0, low_open=True)
+    unfold = check_bool("unfold", unfold)
+    if callback is not None and not callable(callback):
+        raise MeshRepairError(f"callback must be callable or None, got {type(callback).__name__}")
+    if stages is not None:
+        stages = tuple(stages)
+    SolverOptions(th=th, tol=tol, inner_solver=inner_solver, inner_iters=inner_iters,
+                  n_solver=n_solver, mask_update_every=mask_update_every,
+                  min_feature_edges=min_feature_edges,
+                  **({"stages": stages} if stages else {})).validate()
     report, topo = _check_mesh(V, F, name="input mesh")
-    if lam is not None and not (np.isfinite(lam) and lam >= 0):
-        raise MeshRepairError(f"lam must be a finite number >= 0, got {lam}")
-    for nm, val in (("robust_iters", robust_iters), ("feature_iters", feature_iters)):
-        if val is None and nm == "robust_iters":
-            continue
-        if not isinstance(val, (int, np.integer, float)) or int(val) != val or val < 0:
-            raise MeshRepairError(f"{nm} must be a non-negative integer, got {val}")
     gamma, gamma_rms = noise_statistics(V, F, topo)
     lam_used = lambda_from_noise(gamma) if lam is None else float(lam)
     opts_kw = dict(lam=lam_used, th=th, tol=tol, inner_solver=inner_solver,

@@ -31,8 +31,11 @@ def add_noise(V: np.ndarray, F: np.ndarray, gamma: float, *, direction: str = "n
     -------
     (nV, 3) float64, a new array.
     """
-    if not (np.isfinite(gamma) and gamma >= 0):
-        raise MeshRepairError(f"gamma must be a finite number >= 0, got {gamma}")
+    from .options import check_int, check_number
+
+    gamma = check_number("gamma", gamma, low=0)
+    if seed is not None and not isinstance(seed, np.random.SeedSequence):
+        seed = check_int("seed", seed, low=0)
     if direction not in ("normal", "random"):
         raise MeshRepairError(f"direction must be 'normal' or 'random', got {direction!r}")
     V = np.asarray(V, dtype=np.float64)
