@@ -192,6 +192,8 @@ def _read_text(path: Path) -> str:
 
 
 def _parse_floats(rows: list[list[str]], what: str, line_of: Any) -> np.ndarray:
+    if not rows:
+        return np.empty((0, 3), dtype=np.float64)
     try:
         return np.array(rows, dtype=np.float64).reshape(len(rows), -1)
     except ValueError:
@@ -787,6 +789,8 @@ def write_mesh(
         raise MeshRepairError(f"cannot write '{p}': V must have shape (nV, 3), got {Vf.shape}")
     if Fi.ndim != 2 or Fi.shape[1] != 3:
         raise MeshRepairError(f"cannot write '{p}': F must have shape (nF, 3), got {Fi.shape}")
+    if len(Vf) == 0:
+        raise MeshRepairError(f"cannot write '{p}': the mesh has no vertices (nothing to write)")
     bad = ~np.isfinite(Vf).all(axis=1)
     if bad.any():
         idx = np.flatnonzero(bad)

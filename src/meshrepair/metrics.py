@@ -88,12 +88,30 @@ def point_to_surface(P: np.ndarray, V: np.ndarray, F: np.ndarray) -> np.ndarray:
     """Distance from points ``P (n, 3)`` to the triangle mesh ``(V, F)``.
 
     Exact point-triangle distances against the nearest candidate faces (found with a k-d tree on
-    face centroids, 8 candidates per point), vectorised.
+    face centroids, 8 candidates per point), vectorised. The nearest face is almost always among
+    them on a usual mesh; on a tangled mesh with large, crossing faces it may not be, and the
+    distance is then over-estimated (a property test found a self-distance of 4 % of the
+    bounding-box diagonal on a 42-vertex sphere with strong random noise).
     """
-    from scipy.spatial import cKDTree
 
     V, P = _points(V, "V"), _points(P, "P")
     F = _faces(F, len(V), "F")
+    # work in a centred, unit-size frame: huge (1e300) or tiny coordinates neither overflow
+    # nor underflow in the squared distances; distances scale back by ``s``
+    c = 0.5 * V.min(axis=0) + 0.5 * V.max(axis=0)
+    with np.errstate(over="ignore", invalid="ignore"):
+        s = float(max(np.abs(V - c).max(initial=0.0), np.abs(P - c).max(initial=0.0)))
+    if not np.isfinite(s):
+        raise MeshRepairError("coordinates span more than the float64 range; rescale them")
+    if s == 0:
+        return np.zeros(len(P))
+    return s * _point_to_surface_unit((P - c) / s, (V - c) / s, F)
+
+
+def _point_to_surface_unit(P: np.ndarray, V: np.ndarray, F: np.ndarray) -> np.ndarray:
+    """:func:`point_to_surface` on checked arrays of moderate size."""
+    from scipy.spatial import cKDTree
+
     cen = V[F].mean(axis=1)
     k = min(8, len(F))
     _, idx = cKDTree(cen).query(P, k=k)
@@ -170,7 +188,9 @@ def distances(V: np.ndarray, F: np.ndarray, V_ref: np.ndarray, F_ref: np.ndarray
     F, F_ref = _faces(F, len(V), "F"), _faces(F_ref, len(V_ref), "F_ref")
     a = point_to_surface(_surface_samples(V, F, per_face), V_ref, F_ref)
     b = point_to_surface(_surface_samples(V_ref, F_ref, per_face), V, F)
-    diag = float(np.linalg.norm(V_ref.max(axis=0) - V_ref.min(axis=0)))
+    ext = V_ref.max(axis=0) - V_ref.min(axis=0)
+    m = float(ext.max())
+    diag = m * float(np.linalg.norm(ext / m)) if m > 0 else 0.0
     return {
         "mean": float(0.5 * (a.mean() + b.mean())),
         "hausdorff": float(max(a.max(), b.max())),
