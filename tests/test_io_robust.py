@@ -192,3 +192,14 @@ def test_impossible_paths_are_mesh_repair_errors(tmp_path, capsys):
     assert "too long" in err and "Traceback" not in err
     with pytest.raises(MeshRepairError, match="too long"):
         read_vertex_mask(str(long), 3)
+
+
+@pytest.mark.parametrize("binary", [True, False])
+def test_ply_absurd_header_counts_refused_before_allocating(tmp_path, mesh, binary):
+    V, F = mesh
+    p = write_mesh(tmp_path / "m.ply", V, F, binary=binary)
+    p.write_bytes(_replace_once(p.read_bytes(), f"element face {len(F)}\n".encode(),
+                                b"element face 900000000000\n"))
+    with pytest.raises(MeshRepairError, match=r"900,000,000,000 face records, which need at "
+                                              r"least [\d,]+ bytes"):
+        read_mesh(p)

@@ -227,6 +227,7 @@ def _load_ply(path: Path) -> Any:
         magic = fh.read(4)
     if magic[:3] != b"ply":
         raise _Bad("not a PLY file (bad header: missing 'ply' magic line)")
+    _check_ply_counts(path)
     known = {"face": dict.fromkeys(_PLY_FACE_NAMES, 3)}
     try:
         try:
@@ -247,6 +248,29 @@ def _load_ply(path: Path) -> Any:
         raise _Bad(f"corrupt PLY file ({type(exc).__name__}: {exc})") from None
     _check_ply_extent(path, ply, end)
     return ply
+
+
+def _check_ply_counts(path: Path) -> None:
+    """Refuse, before any allocation, a header whose element counts cannot fit in the file
+    (each record takes at least 1 byte in binary, 2 in ASCII: a value and a line end)."""
+    with open(path, "rb") as fh:
+        head = fh.read(1 << 16)
+    end = head.find(b"end_header")
+    if end < 0:
+        return  # plyfile reports the bad header
+    counts, ascii_ = [], False
+    for line in head[:end].decode("ascii", "replace").splitlines():
+        t = line.split()
+        if len(t) >= 2 and t[0] == "format":
+            ascii_ = t[1] == "ascii"
+        elif len(t) == 3 and t[0] == "element" and t[2].isdigit():
+            counts.append((t[1], int(t[2])))
+    need = sum(c for _, c in counts) * (2 if ascii_ else 1)
+    size = path.stat().st_size - end
+    if need > size:
+        desc = ", ".join(f"{c:,} {n}" for n, c in counts)
+        raise _Bad(f"the header declares {desc} records, which need at least {need:,} bytes, "
+                   f"but the file has {size:,} bytes of data (corrupt header or truncated file)")
 
 
 def _ply_counts(ply: Any) -> str:
