@@ -203,3 +203,14 @@ def test_ply_absurd_header_counts_refused_before_allocating(tmp_path, mesh, bina
     with pytest.raises(MeshRepairError, match=r"900,000,000,000 face records, which need at "
                                               r"least [\d,]+ bytes"):
         read_mesh(p)
+
+
+def test_binary_stl_refuses_coordinates_beyond_float32(tmp_path, mesh):
+    V, F = mesh
+    p = tmp_path / "big.stl"
+    with pytest.raises(MeshRepairError, match="float32 of binary STL"):
+        write_mesh(p, V * 1e300, F)  # used to write inf coordinates silently
+    assert not p.exists() and list(tmp_path.iterdir()) == []
+    write_mesh(p, V * 1e300, F, binary=False)  # ASCII STL keeps float64
+    m = read_mesh(p)
+    assert np.isfinite(m.V).all() and np.abs(m.V).max() > 1e299

@@ -190,6 +190,7 @@ def test_write_then_read_contract(tmp_path_factory, mesh, ext, binary):
         return
     assert [x.name for x in d.iterdir()] == [p.name]
     m = read_mesh(p)
+    assert np.isfinite(m.V).all(), "a written file reads back non-finite coordinates"
     if ext != ".stl":  # STL stores a soup (float32 when binary): checked by the readers' tests
         assert np.array_equal(m.F, np.asarray(F).astype(np.int64))
         assert np.array_equal(m.V, np.asarray(V, dtype=np.float64))

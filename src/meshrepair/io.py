@@ -677,9 +677,18 @@ def _read_stl(path: Path) -> MeshData:
 
 
 def _write_stl(fh: Any, V: np.ndarray, F: np.ndarray, binary: bool, path: Path) -> None:
-    c = np.cross(V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]])
+    if binary and len(V) and np.abs(V).max() > np.finfo(np.float32).max:
+        raise MeshRepairError(
+            f"cannot write '{path}': coordinates up to {np.abs(V).max():.3g} do not fit the "
+            "float32 of binary STL; write PLY, OBJ or ASCII STL (binary=False)")
+    # face normals from edges scaled per face: no overflow for huge coordinates
+    e1, e2 = V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]]
+    with np.errstate(over="ignore", invalid="ignore"):
+        s = np.maximum(np.abs(e1).max(axis=1), np.abs(e2).max(axis=1))[:, None]
+        s = np.where(np.isfinite(s) & (s > 0), s, 1.0)
+        c = np.cross(e1 / s, e2 / s)
     nrm = np.linalg.norm(c, axis=1, keepdims=True)
-    N = np.divide(c, nrm, out=np.zeros_like(c), where=nrm > 0)
+    N = np.divide(c, nrm, out=np.zeros_like(c), where=(nrm > 0) & np.isfinite(nrm))
     if binary:
         V32 = V.astype(np.float32)
         if not np.array_equal(V32.astype(np.float64), V):
