@@ -177,6 +177,18 @@ def test_noise_and_metrics_contract(mesh, gamma):
         assert all(np.isfinite(v) and v >= 0 for v in d.values())
 
 
+@given(broken_meshes(), st.sampled_from(["curvature", "none"]), st.sampled_from(["flat",
+                                                                                  "smooth"]))
+def test_render_contract(mesh, color, shading):
+    from meshrepair.render import render_mesh
+
+    V, F = mesh
+    img = _call(lambda a, b: render_mesh(a, b, width=48, height=48, color_by=color,
+                                         shading=shading, colorbar=False), V, F)
+    if img is not None:
+        assert img.shape == (48, 48, 3) and img.dtype == np.uint8
+
+
 @given(broken_meshes(), st.sampled_from([".ply", ".obj", ".off", ".stl"]), st.booleans())
 def test_write_then_read_contract(tmp_path_factory, mesh, ext, binary):
     """write_mesh accepts or refuses (nothing written); what it writes reads back exactly (STL:
