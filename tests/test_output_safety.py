@@ -216,3 +216,20 @@ def test_json_log_needs_a_json_name(tmp_path):
         write_json(tmp_path / "log.ply", {})
     p = write_json(tmp_path / "log.json", {"x": np.float32(1.5), "a": np.arange(3)})
     assert p.read_text().replace(" ", "").replace("\n", "") == '{"x":1.5,"a":[0,1,2]}'
+
+
+def test_output_folder_rule(tmp_path):
+    from meshrepair.commands.common import make_folder, output_folder
+
+    new = tmp_path / "new" / "deeper"
+    paths = output_folder(new, ["a.ply", "b.png"], [])
+    assert paths == [new / "a.ply", new / "b.png"] and not new.exists()  # nothing made yet
+    assert make_folder(new).is_dir()
+    (new / "b.png").write_bytes(b"old")
+    with pytest.raises(MeshRepairError, match=r"b\.png' exists; pass --force"):
+        output_folder(new, ["a.ply", "b.png"], [])
+    assert output_folder(new, ["a.ply", "b.png"], [], force=True)[1].read_bytes() == b"old"
+    src = new / "a.ply"
+    src.write_bytes(b"input")
+    with pytest.raises(MeshRepairError, match="input"):
+        output_folder(new, ["a.ply"], [src], force=True)

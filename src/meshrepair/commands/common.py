@@ -93,6 +93,44 @@ def output_path(out: str | os.PathLike, inputs: list, *, force: bool = False,
     return o
 
 
+def output_folder(folder: str | os.PathLike, names: list[str], inputs: list, *,
+                  force: bool = False, what: str = "--outdir") -> list[Path]:
+    """The output rule for a command that writes several files into a folder (demo, batch).
+
+    The folder may exist (it is created later, after the checks, by :func:`make_folder`);
+    each ``folder / name`` is checked with :func:`output_path` (never an input, never an
+    existing file without ``force``). Returns the file paths.
+    """
+    d = Path(folder)
+    try:
+        exists, is_dir = d.exists(), d.is_dir()
+    except OSError as exc:
+        raise MeshRepairError(f"{what} {str(d)!r}: {exc.strerror or exc}") from None
+    if exists and not is_dir:
+        raise MeshRepairError(f"{what} {str(d)!r} exists and is not a folder")
+    paths = [d / n for n in names]
+    if exists:
+        done: list[Path] = []
+        for p in paths:
+            try:
+                output_path(p, inputs, force=force, suffixes=(p.suffix.lower(),), others=done)
+            except MeshRepairError as exc:
+                raise MeshRepairError(f"{exc} (from an earlier run? or choose another "
+                                      f"{what})") from None
+            done.append(p)
+    return paths
+
+
+def make_folder(folder: str | os.PathLike, what: str = "--outdir") -> Path:
+    """Create an output folder (and its parents) after :func:`output_folder` checked it."""
+    d = Path(folder)
+    try:
+        d.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise MeshRepairError(f"cannot create {what} {str(d)!r}: {exc.strerror or exc}") from None
+    return d
+
+
 def optional_output(out: str | os.PathLike | None, inputs: list, *, force: bool,
                     suffixes: tuple[str, ...], what: str, others: list | tuple = ()
                     ) -> Path | None:

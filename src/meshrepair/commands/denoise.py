@@ -11,8 +11,14 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import MeshRepairError
-from .common import ProgressBar, output_path, run_outputs, write_json_log
+from .common import (
+    ProgressBar,
+    make_folder,
+    output_folder,
+    output_path,
+    run_outputs,
+    write_json_log,
+)
 
 log = logging.getLogger(__name__)
 
@@ -128,28 +134,12 @@ def run_demo(args: argparse.Namespace) -> int:
     from ..metrics import msae, vertex_error
 
     data = files("meshrepair") / "data"
-    outdir = Path(args.outdir)
-    out, png = outdir / "fandisk_denoised.ply", outdir / "fandisk_demo.png"
-    try:
-        exists, is_dir = outdir.exists(), outdir.is_dir()
-    except OSError as exc:
-        raise MeshRepairError(f"--outdir {str(outdir)!r}: {exc.strerror or exc}") from None
-    if exists and not is_dir:
-        raise MeshRepairError(f"--outdir {str(outdir)!r} exists and is not a folder")
-    if exists:  # a second run: the same rule as every output file (no overwrite without --force)
-        try:
-            for f in (out,) if args.no_render else (out, png):
-                output_path(f, [], force=args.force, suffixes=(f.suffix,))
-        except MeshRepairError as exc:
-            raise MeshRepairError(f"{exc} (from an earlier demo run? or choose another "
-                                  "--outdir)") from None
+    names = ["fandisk_denoised.ply"] + ([] if args.no_render else ["fandisk_demo.png"])
+    out, *rest = output_folder(args.outdir, names, [], force=args.force)
+    png = rest[0] if rest else None
     noisy = read_mesh(str(data / "fandisk_noisy.ply"))
     truth = read_mesh(str(data / "fandisk.ply"))
-    try:
-        outdir.mkdir(parents=True, exist_ok=True)
-    except OSError as exc:
-        raise MeshRepairError(f"cannot create --outdir {str(outdir)!r}: "
-                              f"{exc.strerror or exc}") from None
+    make_folder(args.outdir)
     print("meshrepair demo: feature-aware denoising of the fandisk CAD part")
     print("  input: published noisy fandisk (Gaussian noise, 0.3 mean edge lengths), "
           f"{len(noisy.V)} vertices")
