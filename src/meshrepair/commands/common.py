@@ -199,7 +199,7 @@ def add_report_option(p) -> None:
 
 def write_run_report(path: str | os.PathLike | None, *, title: str, input_mesh, output_mesh,
                      masks: dict, history: list, parameters: dict, metrics: dict,
-                     timings: dict, force: bool = False) -> None:
+                     timings: dict, force: bool = False, **extra) -> None:
     """Write the HTML report of a run if ``path`` is given (see :mod:`meshrepair.report`);
     ``path`` must have been checked with :func:`output_path` (see :func:`run_outputs`)."""
     if not path:
@@ -212,5 +212,5 @@ def write_run_report(path: str | os.PathLike | None, *, title: str, input_mesh, 
               for k, v in parameters.items()}
     write_report(path, title=title, input_mesh=input_mesh, output_mesh=output_mesh, masks=masks,
                  history=history, parameters=params, metrics=metrics, timings=timings,
-                 overwrite=force)
+                 overwrite=force, **extra)  # extra: holes, highlight, regions (write_report)
     print(f"wrote {path}")
