@@ -121,29 +121,43 @@ class SolverOptions:
     huber_delta: float = 0.0
 
     def validate(self) -> None:
+        """Check every option (finite, in range, known choice); MeshRepairError naming it."""
         from .errors import MeshRepairError
+        from .options import check_bool, check_choice, check_int, check_number
 
-        if self.inner_solver not in INNER_SOLVERS:
-            raise MeshRepairError(f"inner_solver must be one of {INNER_SOLVERS}, "
-                                  f"got {self.inner_solver!r}")
-        if self.n_solver not in N_SOLVERS:
-            raise MeshRepairError(f"n_solver must be one of {N_SOLVERS}, got {self.n_solver!r}")
-        if not self.lam >= 0 or not np.isfinite(self.lam):
-            raise MeshRepairError(f"lam must be a finite number >= 0, got {self.lam}")
-        if not 0 < self.th < 180:
+        check_choice("inner_solver", self.inner_solver, INNER_SOLVERS)
+        check_choice("n_solver", self.n_solver, N_SOLVERS)
+        check_choice("mask_source", self.mask_source, ("N", "V"))
+        check_number("lam", self.lam, low=0)
+        if not (isinstance(self.th, (int, float, np.number)) and 0 < self.th < 180):
             raise MeshRepairError(f"th must be an angle in (0, 180) degrees, got {self.th}")
-        if not (np.isfinite(self.huber_delta) and self.huber_delta >= 0):
-            raise MeshRepairError(f"huber_delta must be a finite number >= 0, got "
-                                  f"{self.huber_delta}")
+        check_number("huber_delta", self.huber_delta, low=0)
+        check_number("willmore_weight", self.willmore_weight, low=0)
+        check_number("tol", self.tol, low=0, low_open=True)
+        check_int("inner_iters", self.inner_iters, low=1)
+        check_number("n_rtol", self.n_rtol, low=0, high=1, low_open=True, high_open=True)
+        check_int("mask_update_every", self.mask_update_every, low=0)
+        check_int("min_feature_edges", self.min_feature_edges, low=1)
+        check_bool("precondition", self.precondition)
         if not self.stages:
             raise MeshRepairError("at least one stage is needed")
         for s in self.stages:
+            if not isinstance(s, Stage):
+                raise MeshRepairError(f"stages must be Stage objects, got {type(s).__name__}")
             if s.mask not in MASK_MODES:
                 raise MeshRepairError(f"stage mask must be one of {MASK_MODES}, got {s.mask!r}")
-            if not s.eps > 1:
+            if not (isinstance(s.eps, (int, float, np.number)) and s.eps > 1
+                    and np.isfinite(s.eps)):
                 raise MeshRepairError(f"stage eps must be > 1 (rule (24)), got {s.eps}")
-            if not (s.a > 0 and s.beta2_ratio > 0 and s.max_iter >= 0):
-                raise MeshRepairError(f"invalid stage {s}")
+            try:
+                check_number("stage a", s.a, low=0, low_open=True)
+                check_number("stage beta2_ratio", s.beta2_ratio, low=0, low_open=True)
+                check_int("stage max_iter", s.max_iter, low=0)
+                check_number("stage switch_tol", s.switch_tol, low=0)
+                check_int("stage min_iter", s.min_iter, low=0)
+                check_number("stage relax", s.relax, low=0, high=1)
+            except MeshRepairError as exc:
+                raise MeshRepairError(f"invalid stage {s.name!r}: {exc}") from None
 
 
 @dataclass
