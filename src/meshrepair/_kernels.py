@@ -139,13 +139,14 @@ if HAVE_NUMBA:
             q = np.sqrt(cx * cx + cy * cy + cz * cz)
             if q < 1e-300:
                 q = 1e-300
-            nx, ny, nz = cx / q, cy / q, cz / q
+            iq = 1.0 / q  # one division per face (six measured 1.3x slower)
+            nx, ny, nz = cx * iq, cy * iq, cz * iq
             zx, zy, zz = z[m, 0], z[m, 1], z[m, 2]
             zn = zx * nx + zy * ny + zz * nz
             e += zn
-            gx = (zx - zn * nx) / q
-            gy = (zy - zn * ny) / q
-            gz = (zz - zn * nz) / q
+            gx = (zx - zn * nx) * iq
+            gy = (zy - zn * ny) * iq
+            gz = (zz - zn * nz) * iq
             # corner i: g x (p2 - p1)
             ux, uy, uz = p2x - p1x, p2y - p1y, p2z - p1z
             grad[i, 0] += gy * uz - gz * uy
@@ -170,9 +171,10 @@ if HAVE_NUMBA:
             ax, ay, az, bx, by, bz, cx, cy, cz = _tri(V, i, j, k)
             q = np.sqrt(cx * cx + cy * cy + cz * cz)
             if q > 0:
-                out[m, 0] = cx / q
-                out[m, 1] = cy / q
-                out[m, 2] = cz / q
+                iq = 1.0 / q
+                out[m, 0] = cx * iq
+                out[m, 1] = cy * iq
+                out[m, 2] = cz * iq
         return out
 
     @njit(cache=True)
@@ -239,10 +241,13 @@ if HAVE_NUMBA:
         # CG on the Kronecker system (A ⊗ I3) vec(X) = vec(B), A = DᵀD + c I with interior-edge
         # weights w: scalar alpha/beta from Frobenius products, so the iterates are exactly
         # equivariant under rotations of the columns. Jacobi preconditioner, Z = R / diag is
-        # never stored.
+        # never stored; the direction update P = Z + beta P is made at the start of the next
+        # iteration, so none is wasted after the last. (Fusing it into the product, recomputing
+        # Z + beta P at each neighbour, measured 1.3x slower: the kernel is compute-bound there.)
         n = B.shape[0]
         W3 = np.zeros((n, 3))
         diag = np.empty(n)
+        idg = np.empty(n)
         for f in range(n):
             d = 0.0
             for k in range(3):
@@ -251,6 +256,7 @@ if HAVE_NUMBA:
                     W3[f, k] = w[e]
                     d += w[e]
             diag[f] = d + c
+            idg[f] = 1.0 / diag[f]
         R = np.empty_like(B)
         AP = np.empty_like(B)
         _nb_lap_matvec_dot(nb, W3, diag, X, AP)
@@ -259,37 +265,45 @@ if HAVE_NUMBA:
         rn = 0.0
         P = np.empty_like(B)
         for f in range(n):
-            idg = 1.0 / diag[f]
+            i = idg[f]
             for k in range(3):
                 r = B[f, k] - AP[f, k]
                 R[f, k] = r
-                P[f, k] = r * idg
+                P[f, k] = r * i
                 bn += B[f, k] * B[f, k]
-                rz += r * r * idg
+                rz += r * r * i
                 rn += r * r
         tol2 = rtol * rtol * max(bn, 1e-300)
         it = 0
+        beta = 0.0
         while it < maxiter and rn > tol2:
+            if it > 0:
+                for f in range(n):
+                    i = idg[f]
+                    P[f, 0] = R[f, 0] * i + beta * P[f, 0]
+                    P[f, 1] = R[f, 1] * i + beta * P[f, 1]
+                    P[f, 2] = R[f, 2] * i + beta * P[f, 2]
             pap = _nb_lap_matvec_dot(nb, W3, diag, P, AP)
             if pap <= 0.0:
                 break
             alpha = rz / pap
             rz_new = 0.0
             rn = 0.0
-            for f in range(n):
-                idg = 1.0 / diag[f]
-                for k in range(3):
-                    X[f, k] += alpha * P[f, k]
-                    r = R[f, k] - alpha * AP[f, k]
-                    R[f, k] = r
-                    rz_new += r * r * idg
-                    rn += r * r
+            for f in range(n):  # one accumulation per face and sum (short dependency chains)
+                X[f, 0] += alpha * P[f, 0]
+                X[f, 1] += alpha * P[f, 1]
+                X[f, 2] += alpha * P[f, 2]
+                r0 = R[f, 0] - alpha * AP[f, 0]
+                r1 = R[f, 1] - alpha * AP[f, 1]
+                r2 = R[f, 2] - alpha * AP[f, 2]
+                R[f, 0] = r0
+                R[f, 1] = r1
+                R[f, 2] = r2
+                rr = r0 * r0 + r1 * r1 + r2 * r2
+                rz_new += rr * idg[f]
+                rn += rr
             beta = rz_new / rz if rz > 0 else 0.0
             rz = rz_new
-            for f in range(n):
-                idg = 1.0 / diag[f]
-                for k in range(3):
-                    P[f, k] = R[f, k] * idg + beta * P[f, k]
             it += 1
         return it
 
@@ -496,9 +510,10 @@ if HAVE_NUMBA:
         z = np.empty_like(N)
         for f in range(N.shape[0]):
             q = np.sqrt(N[f, 0] ** 2 + N[f, 1] ** 2 + N[f, 2] ** 2)
+            iq = 1.0 / q if q > 0 else 0.0
             for k in range(3):
                 if q > 0:
-                    N[f, k] /= q
+                    N[f, k] *= iq
                 else:
                     N[f, k] = Nv[f, k]
                 z[f, k] = rho2[f, k] - beta2 * N[f, k]
