@@ -178,17 +178,29 @@ def test_fused_armijo_kernels_agree_with_numpy(mesh, rng):
     e2, g2, h2 = FU._np_venergy_grad_hdiag(V, F, z, V0, w, S)
     assert e1 == pytest.approx(e2, rel=1e-12)
     assert np.allclose(g1, g2, rtol=1e-10, atol=1e-12) and np.allclose(h1, h2, rtol=1e-12)
-    assert np.array_equal(h1, K._nb_vhess_diag(V, F, z, w))
+    assert np.allclose(h1, K._nb_vhess_diag(V, F, z, w), rtol=1e-13)
     g3 = np.empty_like(V)
-    assert e1 == K._nb_venergy_grad(V, F, z, V0, w, g3) and np.array_equal(g1, g3)
+    assert e1 == pytest.approx(K._nb_venergy_grad(V, F, z, V0, w, g3), rel=1e-13)
+    assert np.allclose(g1, g3, rtol=1e-12, atol=1e-13)
     hmin = float(np.median(h1))
     d1, d2 = np.empty_like(V), np.empty_like(V)
     s1 = FU._nb_descent_direction(g1, h1, hmin, d1)
     s2 = FU._np_descent_direction(g1, h1, hmin, d2)
-    assert np.array_equal(d1, d2) and s1 == pytest.approx(s2, rel=1e-12) and s1 > 0
+    assert np.allclose(d1, d2, rtol=1e-15) and s1 == pytest.approx(s2, rel=1e-12) and s1 > 0
     o1, o2 = np.empty_like(V), np.empty_like(V)
     t1 = FU._nb_venergy_trial(V, d1, 0.3, o1, F, z, V0, w)
     t2 = FU._np_venergy_trial(V, d1, 0.3, o2, F, z, V0, w)
-    assert np.array_equal(o1, V + 0.3 * d1) and np.array_equal(o1, o2)
+    assert np.allclose(o1, V + 0.3 * d1, rtol=1e-15, atol=1e-15) and np.allclose(o1, o2)
     assert t1 == pytest.approx(t2, rel=1e-12)
     assert t1 == pytest.approx(K._nb_venergy(V + 0.3 * d1, F, z, V0, w), rel=1e-14)
+
+
+def test_rel_change_kernel_agrees(mesh, rng):
+    from meshrepair import _fused as FU
+
+    V, _ = mesh
+    W = V + 1e-3 * rng.normal(size=V.shape)
+    want = np.linalg.norm(W - V) / np.linalg.norm(V)
+    assert FU._nb_rel_change(W, V) == pytest.approx(want, rel=1e-12)
+    assert FU._np_rel_change(W, V) == pytest.approx(want, rel=1e-12)
+    assert FU.rel_change(V, V) == 0.0

@@ -1,4 +1,6 @@
-"""Fused passes of the preconditioned Armijo V-descent (26), compiled with numba when present.
+"""Fused passes of the hot loop, compiled with numba when present.
+
+The preconditioned Armijo V-descent (26).
 
 :func:`meshrepair.inner.solve_armijo` needs, per call, the energy, gradient (28) and Jacobi
 scale of (26) at the start point, then per descent step the direction ``d = -D⁻¹ ∇J`` with its
@@ -12,6 +14,9 @@ a numpy temporary ``V + s d`` plus one energy pass. Here:
 * :func:`venergy_trial`: writes ``V + s d`` into a reused buffer and evaluates (26) there, in one
   vertex pass and one face pass.
 
+The ADMM loop's relative change of V (rule (35)) is :func:`rel_change`: one pass, no
+temporaries.
+
 Each kernel has a numpy twin (``tests/test_kernels.py`` checks they agree).
 """
 
@@ -19,12 +24,12 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._kernels import HAVE_NUMBA, _np_venergy, _np_venergy_grad, _np_vhess_diag
+from ._kernels import FASTMATH, HAVE_NUMBA, _np_venergy, _np_venergy_grad, _np_vhess_diag
 
 if HAVE_NUMBA:
     from numba import njit
 
-    @njit(cache=True)
+    @njit(cache=True, fastmath=FASTMATH)
     def _nb_venergy_grad_hdiag(V, F, z, V0, wfid, grad, h):  # pragma: no cover - compiled
         nV = V.shape[0]
         f = 0.0
@@ -80,7 +85,7 @@ if HAVE_NUMBA:
             h[k] += s * (ax * ax + ay * ay + az * az)
         return e + 0.5 * f
 
-    @njit(cache=True)
+    @njit(cache=True, fastmath=FASTMATH)
     def _nb_descent_direction(g, h, h_min, d):  # pragma: no cover - compiled
         s = 0.0
         for v in range(g.shape[0]):
@@ -94,7 +99,7 @@ if HAVE_NUMBA:
                 s -= g[v, k] * x
         return s
 
-    @njit(cache=True)
+    @njit(cache=True, fastmath=FASTMATH)
     def _nb_venergy_trial(V, d, step, out, F, z, V0, wfid):  # pragma: no cover - compiled
         f = 0.0
         for v in range(V.shape[0]):
@@ -127,6 +132,28 @@ if HAVE_NUMBA:
                 q = 1e-300
             e += (z[m, 0] * cx + z[m, 1] * cy + z[m, 2] * cz) / q
         return e + 0.5 * f
+
+    @njit(cache=True, fastmath=FASTMATH)
+    def _nb_rel_change(A, B):  # pragma: no cover - compiled
+        num = 0.0
+        den = 0.0
+        for i in range(A.shape[0]):
+            for k in range(3):
+                x = A[i, k] - B[i, k]
+                num += x * x
+                den += B[i, k] * B[i, k]
+        return np.sqrt(num / max(den, 1e-300))
+
+
+def _np_rel_change(A, B):
+    d = A - B
+    return float(np.sqrt(np.einsum("ij,ij->", d, d) / max(np.einsum("ij,ij->", B, B), 1e-300)))
+
+
+def rel_change(A, B):
+    """``||A - B||_F / ||B||_F`` (rule (35) with ``A = V^(k+1)``, ``B = V^(k)``)."""
+    f = _nb_rel_change if HAVE_NUMBA else _np_rel_change
+    return float(f(A, B))
 
 
 def _np_venergy_grad_hdiag(V, F, z, V0, wfid, S):

@@ -22,6 +22,13 @@ try:  # pragma: no cover - exercised through both paths in tests
 except ImportError:  # pragma: no cover
     HAVE_NUMBA = False
 
+FASTMATH = {"contract", "arcp", "nsz", "reassoc"}
+"""LLVM fast-math flags of the hot-loop kernels: fused multiply-add, reciprocals, reassociated
+sums (vectorised reductions). Not ``nnan``/``ninf``: inputs are validated finite, and comparisons
+stay IEEE. Results differ from the numpy twins by rounding only (tests/test_kernels.py); the
+V-gradient kernel measured 15 % faster on fandisk (141 vs 165 µs); the PCG kernels
+4 % slower, so they keep strict IEEE arithmetic."""
+
 
 # ---------------------------------------------------------------------------------------------
 # numpy reference implementations
@@ -92,7 +99,7 @@ if HAVE_NUMBA:
         bz = V[k, 2] - V[i, 2]
         return ax, ay, az, bx, by, bz, ay * bz - az * by, az * bx - ax * bz, ax * by - ay * bx
 
-    @njit(cache=True, fastmath=False)
+    @njit(cache=True, fastmath=FASTMATH)
     def _nb_venergy(V, F, z, V0, wfid):  # pragma: no cover - compiled
         e = 0.0
         for m in range(F.shape[0]):
@@ -112,7 +119,7 @@ if HAVE_NUMBA:
                 f += w * (dx * dx + dy * dy + dz * dz)
         return e + 0.5 * f
 
-    @njit(cache=True, fastmath=False)
+    @njit(cache=True, fastmath=FASTMATH)
     def _nb_venergy_grad(V, F, z, V0, wfid, grad):  # pragma: no cover - compiled
         nV = V.shape[0]
         e = 0.0
@@ -163,7 +170,7 @@ if HAVE_NUMBA:
             grad[k, 2] += gx * ay - gy * ax
         return e + 0.5 * f
 
-    @njit(cache=True)
+    @njit(cache=True, fastmath=FASTMATH)
     def _nb_face_normals(V, F):  # pragma: no cover - compiled
         out = np.zeros((F.shape[0], 3))
         for m in range(F.shape[0]):
@@ -177,7 +184,7 @@ if HAVE_NUMBA:
                 out[m, 2] = cz * iq
         return out
 
-    @njit(cache=True)
+    @njit(cache=True, fastmath=FASTMATH)
     def _nb_edge_lengths(V, E):  # pragma: no cover - compiled
         out = np.empty(E.shape[0])
         for e in range(E.shape[0]):
@@ -188,7 +195,7 @@ if HAVE_NUMBA:
             out[e] = np.sqrt(dx * dx + dy * dy + dz * dz)
         return out
 
-    @njit(cache=True)
+    @njit(cache=True, fastmath=FASTMATH)
     def _nb_grad_edges(N, l, fa, fb):  # pragma: no cover - compiled
         out = np.empty((fa.shape[0], 3))
         for e in range(fa.shape[0]):
@@ -354,7 +361,7 @@ def _np_vhess_diag(V, F, z, wfid):
 
 if HAVE_NUMBA:
 
-    @njit(cache=True)
+    @njit(cache=True, fastmath=FASTMATH)
     def _nb_vhess_diag(V, F, z, wfid):  # pragma: no cover - compiled
         h = wfid.copy()
         for m in range(F.shape[0]):
@@ -490,7 +497,7 @@ def _np_sqdist(A, B, wts):
 
 if HAVE_NUMBA:
 
-    @njit(cache=True)
+    @njit(cache=True, fastmath=FASTMATH)
     def _nb_rhs(c, Nv, rho2, beta1, t, rho1, l, fa, fb):  # pragma: no cover - compiled
         B = np.empty_like(Nv)
         ib = 1.0 / beta1
@@ -505,7 +512,7 @@ if HAVE_NUMBA:
                 B[b, k] -= x
         return B
 
-    @njit(cache=True)
+    @njit(cache=True, fastmath=FASTMATH)
     def _nb_normalize_z(N, Nv, rho2, beta2):  # pragma: no cover - compiled
         z = np.empty_like(N)
         for f in range(N.shape[0]):
@@ -519,7 +526,7 @@ if HAVE_NUMBA:
                 z[f, k] = rho2[f, k] - beta2 * N[f, k]
         return N, z
 
-    @njit(cache=True)
+    @njit(cache=True, fastmath=FASTMATH)
     def _nb_update_rho1(t, N, l, fa, fb, rho1, beta1):  # pragma: no cover - compiled
         s = 0.0
         for e in range(fa.shape[0]):
@@ -530,7 +537,7 @@ if HAVE_NUMBA:
                 s += r * r
         return s
 
-    @njit(cache=True)
+    @njit(cache=True, fastmath=FASTMATH)
     def _nb_update_rho2(N, Nv, rho2, beta2):  # pragma: no cover - compiled
         s = 0.0
         for f in range(N.shape[0]):
@@ -540,7 +547,7 @@ if HAVE_NUMBA:
                 s += r * r
         return s
 
-    @njit(cache=True)
+    @njit(cache=True, fastmath=FASTMATH)
     def _nb_reg_energy(Nv, l, fa, fb, sharp, a, w):  # pragma: no cover - compiled
         knee = np.sqrt(2.0 / a)
         s2a = np.sqrt(2.0 * a)
@@ -558,7 +565,7 @@ if HAVE_NUMBA:
                 e += w * n2
         return e
 
-    @njit(cache=True)
+    @njit(cache=True, fastmath=FASTMATH)
     def _nb_sqdist(A, B, wts):  # pragma: no cover - compiled
         s = 0.0
         for i in range(A.shape[0]):
