@@ -204,3 +204,17 @@ def test_rel_change_kernel_agrees(mesh, rng):
     assert FU._nb_rel_change(W, V) == pytest.approx(want, rel=1e-12)
     assert FU._np_rel_change(W, V) == pytest.approx(want, rel=1e-12)
     assert FU.rel_change(V, V) == 0.0
+
+
+def test_kernels_compile_without_a_writable_numba_cache():
+    """Where numba finds no writable cache location it refuses cache=True at decoration time;
+    the package then still imports and runs, compiling its kernels in the process."""
+    code = (
+        "import numba.core.caching as c\n"
+        "c.CacheImpl._locator_classes = []\n"  # as if no cache directory were writable
+        "import numpy as np, meshrepair._kernels as K\n"
+        "assert K.CACHE_DISABLED, 'expected the no-cache fallback'\n"
+        "V = np.array([[0., 0, 0], [1, 0, 0], [0, 1, 0]]); F = np.array([[0, 1, 2]])\n"
+        "assert np.allclose(K.face_normals(V, F), [[0, 0, 1]])\n"
+    )
+    subprocess.run([sys.executable, "-c", code], check=True)

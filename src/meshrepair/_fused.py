@@ -27,7 +27,7 @@ import numpy as np
 from ._kernels import FASTMATH, HAVE_NUMBA, _np_venergy, _np_venergy_grad, _np_vhess_diag
 
 if HAVE_NUMBA:
-    from numba import njit
+    from ._kernels import njit
 
     @njit(cache=True, fastmath=FASTMATH)
     def _nb_venergy_grad_hdiag(V, F, z, V0, wfid, grad, h):  # pragma: no cover - compiled

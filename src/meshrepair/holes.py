@@ -56,7 +56,7 @@ from .errors import MeshRepairError
 from .topology import boundary_loops, connected_components, edge_topology
 
 if HAVE_NUMBA:
-    from numba import njit
+    from ._kernels import njit  # numba.njit, without the disk cache where none is writable
 
 log = logging.getLogger(__name__)
 
