@@ -15,7 +15,9 @@ a numpy temporary ``V + s d`` plus one energy pass. Here:
   vertex pass and one face pass.
 
 The ADMM loop's relative change of V (rule (35)) is :func:`rel_change`: one pass, no
-temporaries.
+temporaries. :func:`normals_update_rho2` computes the normals of the new V and the multiplier
+update (21) in one face pass; :func:`lengths_reg_energy` the new edge lengths and the
+regulariser of (6) (the history energy) in one edge pass.
 
 Each kernel has a numpy twin (``tests/test_kernels.py`` checks they agree).
 """
@@ -24,6 +26,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from . import _kernels as _k
 from ._kernels import FASTMATH, HAVE_NUMBA, _np_venergy, _np_venergy_grad, _np_vhess_diag
 
 if HAVE_NUMBA:
@@ -143,6 +146,86 @@ if HAVE_NUMBA:
                 num += x * x
                 den += B[i, k] * B[i, k]
         return np.sqrt(num / max(den, 1e-300))
+
+    @njit(cache=True, fastmath=FASTMATH)
+    def _nb_normals_update_rho2(V, F, N, rho2, beta2):  # pragma: no cover - compiled
+        Nv = np.zeros((F.shape[0], 3))
+        s = 0.0
+        for m in range(F.shape[0]):
+            i, j, k = F[m, 0], F[m, 1], F[m, 2]
+            ax = V[j, 0] - V[i, 0]
+            ay = V[j, 1] - V[i, 1]
+            az = V[j, 2] - V[i, 2]
+            bx = V[k, 0] - V[i, 0]
+            by = V[k, 1] - V[i, 1]
+            bz = V[k, 2] - V[i, 2]
+            c0 = ay * bz - az * by
+            c1 = az * bx - ax * bz
+            c2 = ax * by - ay * bx
+            q = np.sqrt(c0 * c0 + c1 * c1 + c2 * c2)
+            if q > 0:
+                iq = 1.0 / q
+                c0 *= iq
+                c1 *= iq
+                c2 *= iq
+            else:
+                c0 = c1 = c2 = 0.0
+            Nv[m, 0] = c0
+            Nv[m, 1] = c1
+            Nv[m, 2] = c2
+            r0 = N[m, 0] - c0
+            r1 = N[m, 1] - c1
+            r2 = N[m, 2] - c2
+            rho2[m, 0] -= beta2 * r0
+            rho2[m, 1] -= beta2 * r1
+            rho2[m, 2] -= beta2 * r2
+            s += r0 * r0 + r1 * r1 + r2 * r2
+        return Nv, s
+
+    @njit(cache=True, fastmath=FASTMATH)
+    def _nb_lengths_reg_energy(V, E, Nv, fa, fb, sharp, a, w):  # pragma: no cover - compiled
+        l = np.empty(E.shape[0])
+        knee = np.sqrt(2.0 / a)
+        s2a = np.sqrt(2.0 * a)
+        e = 0.0
+        for i in range(E.shape[0]):
+            u, v = E[i, 0], E[i, 1]
+            dx = V[v, 0] - V[u, 0]
+            dy = V[v, 1] - V[u, 1]
+            dz = V[v, 2] - V[u, 2]
+            le = np.sqrt(dx * dx + dy * dy + dz * dz)
+            l[i] = le
+            p, q = fa[i], fb[i]
+            tx = le * (Nv[p, 0] - Nv[q, 0])
+            ty = le * (Nv[p, 1] - Nv[q, 1])
+            tz = le * (Nv[p, 2] - Nv[q, 2])
+            n2 = tx * tx + ty * ty + tz * tz
+            if sharp[i]:
+                nt = np.sqrt(n2)
+                e += (-0.5 * a * n2 + s2a * nt) if nt < knee else 1.0
+            else:
+                e += w * n2
+        return l, e
+
+
+def normals_update_rho2(V, F, N, rho2, beta2):
+    """Unit face normals ``Nv`` of ``V`` (zero rows for degenerate faces) and the multiplier
+    update (21) ``ρ2 -= β2 (N - Nv)`` in place; returns ``(Nv, ||N - Nv||²)``."""
+    if HAVE_NUMBA:
+        Nv, s = _nb_normals_update_rho2(V, F, N, rho2, float(beta2))
+        return Nv, float(s)
+    Nv = _k.face_normals(V, F)
+    return Nv, _k.update_rho2(N, Nv, rho2, beta2)
+
+
+def lengths_reg_energy(V, E, Nv, fa, fb, sharp, a, w):
+    """Lengths of the interior edges ``E`` of ``V`` and the regulariser of (6) there (see
+    ``_kernels.reg_energy``); returns ``(l, energy)``."""
+    if HAVE_NUMBA:
+        l, e = _nb_lengths_reg_energy(V, E, Nv, fa, fb, sharp, float(a), float(w))
+        return l, float(e)
+    l = _k.edge_lengths(V, E)
+    return l, _k.reg_energy(Nv, l, fa, fb, sharp, a, w)
 
 
 def _np_rel_change(A, B):

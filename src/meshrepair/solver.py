@@ -347,13 +347,12 @@ class ADMMSolver:
                         Vn = self.relaxer.step(Vn, sharp, stage.relax)
                     # (20)-(21) multipliers (D with the lengths of V^(k), as in the N-update)
                     res_t = _k.update_rho1(t, N, l, fa, fb, rho1, beta1)
-                    Nv = _k.face_normals(Vn, F)
-                    res_n = _k.update_rho2(N, Nv, rho2, beta2)
+                    Nv, res_n = _fused.normals_update_rho2(Vn, F, N, rho2, beta2)
                     rel = _fused.rel_change(Vn, V)
                     V = Vn
-                    l = _k.edge_lengths(V, E_int)
                     k += 1
-                    reg = _k.reg_energy(Nv, l, fa, fb, sh, stage.a, o.willmore_weight)
+                    l, reg = _fused.lengths_reg_energy(V, E_int, Nv, fa, fb, sh, stage.a,
+                                                       o.willmore_weight)
                     entry = {
                         "iter": k,
                         "stage": stage.name,
