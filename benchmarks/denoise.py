@@ -119,10 +119,12 @@ def _f(x, fmt="{:.2f}"):
     return "n/a" if x is None or (isinstance(x, float) and not np.isfinite(x)) else fmt.format(x)
 
 
-def table_markdown(rows: list[dict]) -> str:
+def table_markdown(rows: list[dict], before: dict[str, float] | None = None) -> str:
     hdr = ("| case | nV | iters (stop) | s/iter | total s | setup s | I/O s (read+write) | "
            "tracemalloc peak MB | RSS Δ MB | MSAE noisy → result (deg²) | E_V noisy → result |")
     out = [hdr, "|---|---:|---|---:|---:|---:|---:|---:|---:|---|---|"]
+    if before:
+        out = [hdr + " MSAE before (Δ) |", out[1] + "---|"]
     for r in rows:
         if "error" in r:
             out.append(f"| {r['name']} | FAILED: {r['error'].splitlines()[-1][:120]} |")
@@ -134,6 +136,10 @@ def table_markdown(rows: list[dict]) -> str:
             f"{r['io_read_s'] + r['io_write_s']:.3f} | {_f(r.get('trace_peak_mb'), '{:.0f}')} | "
             f"{r['rss_delta_mb']:.0f} | {r['msae_in']:.1f} → {r['msae_out']:.2f} | "
             f"{r['ev_in']:.2e} → {r['ev_out']:.2e} |")
+        if before:
+            b = before.get(r["name"])
+            out[-1] += (f" {b:.2f} ({100 * (r['msae_out'] / b - 1):+.2f} %) |" if b
+                        else " n/a |")
     return "\n".join(out)
 
 
@@ -682,13 +688,13 @@ def main(argv=None) -> int:
           f"{time.strftime('%Y-%m-%d %H:%M')}.", ""]
     rows = [r for r in results if r["kind"] != "scaling"]
     srows = [r for r in results if r["kind"] == "scaling"]
+    before = _before_msae(args.before)
     if rows:
         md += [f"Default `denoise(V, F)`; min of {args.repeats} runs per case.", "",
-               table_markdown(rows), ""]
+               table_markdown(rows, before), ""]
     if srows:
         md += ["Scaling (subdivided shared mesh + normal noise γ = 0.3, seed 0):", "",
                scaling_markdown(srows, args.iters), ""]
-    before = _before_msae(args.before)
     if vs_rows:
         md += ["Side by side with MeshLib `meshDenoiseViaNormals` (default settings):", "",
                vs_markdown(vs_rows, before), ""]
