@@ -28,7 +28,14 @@ roughness, for comparison). ``t`` is wall seconds of
 ``pca-plane``, ``disc``: planar projection; ``liepa``: Liepa's minimum-weight triangulation, the
 fallback when a planar patch intersects the surface).
 
-Usage: ``python benchmarks/holes.py [--enclose auto,liepa] [--cases cut,bunny,denoise]``
+Issue 13 cases (``benchmarks/_holes_peers.py``): ``real`` fills every shared mesh with real holes
+at defaults and prints time and peak RSS; ``peers`` cuts discs from smooth meshes (radii 4, 8, 16)
+and across corners and creases of CAD meshes (radii 4, 8) and refills them with meshrepair, CGAL
+``triangulate_refine_and_fair_hole``, MeshLib ``fillHoleNicely`` and pymeshfix (mean/Hausdorff
+patch distance, normal deviation, crease angle restored vs truth, time, peak memory);
+``--crease-picture PNG`` draws docs/img/holes_crease.png.
+
+Usage: ``python benchmarks/holes.py [--enclose auto,liepa] [--cases cut,bunny,denoise,real,peers]``
 (about a minute). ``--enclose`` sets the order in which :data:`meshrepair.fill.ENCLOSE_ORDER`
 tries the enclosing methods (default: the library's), e.g. ``liepa,auto`` to try Liepa's
 triangulation first.
@@ -230,6 +237,53 @@ def bunny_picture(path: str) -> None:
     print(f"wrote {path}", flush=True)
 
 
+def crease_picture(path: str, name: str = "fandisk", kind: str = "crease",
+                   radius: int = 8) -> None:
+    """docs/img/holes_crease.png: a hole cut across a crease of a CAD mesh, refilled by
+    meshrepair (crease continued) and by CGAL refine-and-fair, next to the truth."""
+    import _holes_peers
+
+    from meshrepair.render import compare_figure
+
+    V, F, _ = _common.read(name)
+    c = [x for x in _holes_peers.pick_centres(V, F) if x[0] == kind][0][1]
+    Vc, Fc, F_rm = cut_disc(V, F, c, radius)
+    le = mean_edge_length(V, F)
+    diag = float(np.linalg.norm(np.ptp(V, axis=0)))
+    outs = [("truth", V, F, None), ("cut", Vc, Fc, None)]
+    for mname in ("meshrepair", "CGAL refine+fair"):
+        fn = _holes_peers.PEERS[mname]
+        try:
+            Vo, Fo = fn(Vc, Fc, le)
+        except Exception as exc:  # noqa: BLE001
+            print(f"{mname} skipped: {exc!r}")
+            continue
+        new = _holes_peers.new_faces(Vc, Fc, Vo, Fo)
+        m = _holes_peers.measure(V, F_rm, V, F, Vo, Fo, new, diag, le)
+        outs.append((f"{mname}\nnormal {m[2]:.1f}°, crease {m[4]:.0f}° (truth {m[5]:.0f}°)",
+                     Vo, Fo, new))
+    centre = V[c]
+    # view along the mean normal of the faces round the centre; crop to the neighbourhood
+    fn_ = face_normals(V, F)
+    near = np.linalg.norm(V[F].mean(axis=1) - centre, axis=1) < 3 * le
+    n = fn_[near].sum(axis=0)
+    n /= np.linalg.norm(n)
+    az, el = np.degrees(np.arctan2(n[0], n[2])), np.degrees(np.arcsin(np.clip(n[1], -1, 1)))
+    meshes, titles, regions = [], [], []
+    for title, Vx, Fx, new in outs:
+        keep = np.linalg.norm(Vx[Fx].mean(axis=1) - centre, axis=1) < 1.4 * radius * le
+        reg = np.zeros(len(Fx), bool)
+        if new is not None:
+            reg[new] = True
+        meshes.append((Vx, Fx[keep]))
+        regions.append(reg[keep])
+        titles.append(title)
+    compare_figure(meshes, titles, out_path=path, width=420, height=420, azimuth=az,
+                   elevation=el, fit="first", region_mask=regions, color_by="none",
+                   shading="flat")
+    print(f"wrote {path}", flush=True)
+
+
 def main() -> None:
     import argparse
 
@@ -240,12 +294,23 @@ def main() -> None:
                     help="comma-separated order of enclosing methods (auto, liepa); default: "
                          f"{','.join(meshrepair.fill.ENCLOSE_ORDER)}")
     ap.add_argument("--cases", default="cut,bunny,denoise",
-                    help="comma-separated subset of: cut, bunny, denoise")
+                    help="comma-separated subset of: cut, bunny, denoise, peers (cut-and-refill "
+                         "against CGAL, MeshLib, pymeshfix), real (the shared meshes with real "
+                         "holes at defaults: time and peak RSS)")
+    ap.add_argument("--smooth", default="spot,nefertiti",
+                    help="smooth meshes of the peers case (default: spot,nefertiti)")
+    ap.add_argument("--cad", default="fandisk,twelve,trim_star,rocker_arm",
+                    help="CAD meshes of the peers case (holes across a corner and a crease)")
     ap.add_argument("--picture", metavar="PNG", default=None,
                     help="only write the bunny before/after picture (docs/img/holes_bunny.png)")
+    ap.add_argument("--crease-picture", metavar="PNG", default=None,
+                    help="only write the crease-through-a-hole picture (docs/img/holes_crease.png)")
     args = ap.parse_args()
     if args.picture:
         bunny_picture(args.picture)
+        return
+    if args.crease_picture:
+        crease_picture(args.crease_picture)
         return
     if args.enclose:
         order = tuple(m.strip() for m in args.enclose.split(","))
@@ -253,14 +318,15 @@ def main() -> None:
             ap.error("--enclose takes methods among: auto, liepa")
         meshrepair.fill.ENCLOSE_ORDER = order
     cases = {c.strip() for c in args.cases.split(",")}
-    if cases - {"cut", "bunny", "denoise"}:
-        ap.error("--cases takes: cut, bunny, denoise")
+    if cases - {"cut", "bunny", "denoise", "peers", "real"}:
+        ap.error("--cases takes: cut, bunny, denoise, peers, real")
     _common.limit_threads(1)
     info = _common.machine_info()
     print(f"machine: {info.get('cpu', '?')}, {info.get('cores')} cores; python {info['python']}, "
           f"numpy {info['numpy']}, scipy {info.get('scipy')}; git {info.get('git')}")
-    lines = [HEADER]
-    print(HEADER, flush=True)
+    lines = [HEADER] if cases & {"cut", "bunny"} else []
+    if lines:
+        print(HEADER, flush=True)
     print(f"enclosing order: {','.join(meshrepair.fill.ENCLOSE_ORDER)}", flush=True)
     _common.warm_imports(jit=True)
     # compile (or load) the numba kernel of Liepa's triangulation outside the timings
@@ -274,6 +340,25 @@ def main() -> None:
         run_bunny(lines)
     if "denoise" in cases:
         run_denoise(lines)
+    if "real" in cases or "peers" in cases:
+        import _holes_peers
+
+        if "real" in cases:
+            lines.append("")
+            _holes_peers.run_real(lines)
+        if "peers" in cases:
+            notes: list[str] = []
+            smooth = {"spot": (0.47, 0.0, 0.2), "nefertiti": None}
+            sm = []
+            for nm in [x.strip() for x in args.smooth.split(",") if x.strip()]:
+                if smooth.get(nm) is None:
+                    Vx, Fx, _ = _common.read(nm)
+                    smooth[nm] = tuple(Vx[len(Vx) // 3])  # a deterministic vertex
+                sm.append((nm, smooth[nm]))
+            lines.append("")
+            _holes_peers.run_peers(cut_disc, lines, notes, sm,
+                                   [x.strip() for x in args.cad.split(",") if x.strip()])
+            lines.extend(notes)
     print("\n--- table ---")
     print("\n".join(lines))
 

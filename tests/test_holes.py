@@ -16,6 +16,7 @@ from meshrepair.holes import (
     select_holes,
     self_intersections,
 )
+from meshrepair.holes import liepa as HL
 from meshrepair.topology import boundary_loops, edge_topology
 from meshrepair.validate import check_mesh
 
@@ -263,17 +264,17 @@ def test_min_weight_triangulation_numpy_twin_agrees(monkeypatch):
     P = np.c_[np.cos(t), np.sin(t), 0.4 * np.cos(2 * t)] + 0.02 * rng.normal(size=(40, 3))
     O = 0.5 * (P + np.roll(P, -1, axis=0)) * 1.2 + [0, 0, 0.1]
     O[5] = np.nan  # an edge without a face
-    N0, has0 = H._edge_normals(P, O)
+    N0, has0 = HL._edge_normals(P, O)
     forbid = np.zeros((40, 40), bool)
     forbid[3, 20] = forbid[10, 30] = True
-    r_np = H._np_liepa_dp(P, N0, has0, forbid, H._DP_TOL)
+    r_np = HL._np_liepa_dp(P, N0, has0, forbid, HL._DP_TOL)
     with monkeypatch.context() as m:
-        m.setattr(H, "HAVE_NUMBA", False)
+        m.setattr(HL, "HAVE_NUMBA", False)
         T_np = min_weight_triangulation(P, opposite=O, forbidden=[[3, 20], [30, 10]])
     assert T_np.shape == (38, 3)
-    if not H.HAVE_NUMBA:
+    if not HL.HAVE_NUMBA:
         pytest.skip("numba not installed: only the numpy path")
-    r_nb = H._nb_liepa_dp(P, N0, has0, forbid, H._DP_TOL)
+    r_nb = HL._nb_liepa_dp(P, N0, has0, forbid, HL._DP_TOL)
     assert np.array_equal(r_np[0], r_nb[0])
     fin = np.isfinite(r_np[1])
     assert np.array_equal(fin, np.isfinite(r_nb[1]))

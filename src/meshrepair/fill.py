@@ -49,6 +49,8 @@ from .holes import (
     select_holes,
     self_intersections,
 )
+from .holes.budget import check_budget, check_fill_options
+from .holes.creases import find_crease_routes
 from .solver import ADMMSolver, SolverOptions, Stage
 from .topology import edge_topology
 
@@ -213,23 +215,123 @@ def _drop_patches(V1: np.ndarray, F1: np.ndarray, reports: list[HoleReport], nV:
         if rep.index in drop:
             rep.status, rep.reason = "skipped", drop[rep.index]
             rep.n_new_vertices = rep.n_new_faces = 0
+            rep.n_creases = 0
+            rep.sharp_edges = np.empty((0, 2), np.int64)
+        elif len(rep.sharp_edges):
+            rep.sharp_edges = remap[rep.sharp_edges]
     return V1[keepV], remap[F1[keepF]]
 
 
 def _intersecting(V: np.ndarray, F: np.ndarray, faces: np.ndarray,
-                  ignore: np.ndarray | None = None) -> int:
-    """Face pairs involving ``faces`` that intersect, not counting faces marked in ``ignore``."""
-    pairs = self_intersections(V, F, faces)
+                  ignore: np.ndarray | None = None, pairs: np.ndarray | None = None) -> int:
+    """Face pairs involving ``faces`` that intersect, not counting faces marked in ``ignore``
+    (``pairs``: precomputed pairs of a superset of ``faces``, filtered instead of recomputed)."""
+    if pairs is None:
+        pairs = self_intersections(V, F, faces)
+    elif len(pairs):
+        mine = np.zeros(len(F), bool)
+        mine[faces] = True
+        pairs = pairs[mine[pairs].any(axis=1)]
     if ignore is not None and len(pairs):
         pairs = pairs[~ignore[pairs].any(axis=1)]
     return len(pairs)
+
+
+BLEND_STEPS = (0.5, 0.25)
+"""When the faired patch intersects the surround, these fractions of the fairing (from the
+initial surface) are tried before the initial surface itself."""
+
+SEAM_RETRY_FACTOR = 1.5
+SEAM_RETRY_MARGIN = 3.0
+"""A planar patch whose mean dihedral angle across its loop exceeds
+``SEAM_RETRY_FACTOR * surround + SEAM_RETRY_MARGIN`` degrees (surround: the original edges within
+3 rings) is enclosed again by Liepa's triangulation and the smoother seam kept. Measured on the
+peers benchmark (docs/holes.md): rocker_arm r=8 seams 25.3° / 19.6° vs surround 7.9° / 8.4°
+(Liepa: 8.6° / 5.8°, patch distance 0.62× / 0.59×), trim_star crease r=8 14.4° vs 5.3° (Liepa
+7.0°, 0.85×); unchanged below the rule: spot (1.7° vs 1.6°), twelve (5.6° vs 2.1°)."""
+
+
+def _seam_angle(V: np.ndarray, F: np.ndarray, faces: np.ndarray, nF: int, ring: bool = False):
+    """Mean dihedral angle (degrees) across the loop edges of the patch ``faces`` (edges between
+    one of them and an original face); with ``ring``, also that of the original edges within 3
+    rings of the patch."""
+    from .geometry import dihedral_angles, face_normals
+
+    near_v = np.zeros(len(V), bool)
+    near_v[F[faces].ravel()] = True
+    reach = near_v.copy()
+    for _ in range(4 if ring else 1):
+        reach[F[reach[F].any(axis=1)].ravel()] = True
+    fl = np.flatnonzero(reach[F].any(axis=1))
+    Fl = F[fl]
+    topo = edge_topology(Fl, len(V))
+    ang = dihedral_angles(face_normals(V, Fl), topo)
+    mine = np.isin(fl, faces)
+    a, b = topo.edge_faces[:, 0], topo.edge_faces[:, 1]
+    inner = b >= 0
+    b = np.maximum(b, 0)
+    seam_e = inner & (mine[a] != mine[b]) & (fl[np.where(mine[a], b, a)] < nF)
+    seam = float(ang[seam_e].mean()) if seam_e.any() else 0.0
+    if not ring:
+        return seam
+    ring_v = near_v.copy()
+    for _ in range(3):
+        ring_v[Fl[ring_v[Fl].any(axis=1)].ravel()] = True
+    orig = (fl < nF) & ring_v[Fl].all(axis=1)
+    sur = inner & orig[a] & orig[b]
+    return seam, float(ang[sur].mean()) if sur.any() else 0.0
+
+
+def _sharp_vertices(V: np.ndarray, F: np.ndarray, th: float, nV: int) -> np.ndarray:
+    """(nV,) bool: vertices on an edge with dihedral angle above ``th``."""
+    from .geometry import face_normals, sharp_edge_mask
+
+    topo = edge_topology(F, nV)
+    m = sharp_edge_mask(face_normals(V, F), topo, th).astype(bool)
+    out = np.zeros(nV, bool)
+    out[topo.edges[m].ravel()] = True
+    return out
+
+
+def _crease_edges(reports: list[HoleReport]) -> np.ndarray:
+    """All patch edges on routed creases, ``(q, 2)`` output vertex indices."""
+    parts = [r.sharp_edges for r in reports if r.status == "filled" and len(r.sharp_edges)]
+    return np.concatenate(parts) if parts else np.empty((0, 2), np.int64)
+
+
+def _edge_ids(topo, pairs: np.ndarray, n: int) -> np.ndarray:
+    """Indices in ``topo.edges`` of the vertex pairs ``(q, 2)`` (pairs that are no edge are
+    dropped)."""
+    if len(pairs) == 0:
+        return np.empty(0, np.int64)
+    e = np.sort(topo.edges, axis=1)
+    code = e[:, 0] * np.int64(n) + e[:, 1]
+    order = np.argsort(code)
+    p = np.sort(np.asarray(pairs, np.int64), axis=1)
+    want = p[:, 0] * np.int64(n) + p[:, 1]
+    pos = np.clip(np.searchsorted(code[order], want), 0, len(code) - 1)
+    hit = code[order][pos] == want
+    return order[pos[hit]]
+
+
+def _finite_rows(V: np.ndarray, Vsafe: np.ndarray, rows: np.ndarray, what: str) -> np.ndarray:
+    """``V`` with the non-finite ``rows`` replaced by ``Vsafe`` (logged)."""
+    bad = rows[~np.isfinite(V[rows]).all(axis=1)]
+    if len(bad):
+        log.warning("%s gave %d non-finite vertex positions; kept the previous ones", what,
+                    len(bad))
+        V = V.copy()
+        V[bad] = Vsafe[bad]
+    return V
 
 
 def _fill_core(V: np.ndarray, F: np.ndarray, holes, skip: dict[int, str], *, denoise: bool,
                initial: str, refine: bool, edge_length: float | None, lam: float | None,
                th: float, a: float, max_iter: int, tol: float, rings: int, relax: float,
                inner_solver: str, inner_iters: int, check: bool,
-               callback: Callable[[dict], None] | None) -> FillResult:
+               callback: Callable[[dict], None] | None,
+               progress: Callable[[int, int], None] | None = None,
+               creases: bool = True, curvature: bool = True) -> FillResult:
     from .geometry import face_normals, sharp_edge_mask
 
     t0 = time.perf_counter()
@@ -237,33 +339,88 @@ def _fill_core(V: np.ndarray, F: np.ndarray, holes, skip: dict[int, str], *, den
     by_index = {h.index: h for h in holes}
     stage: dict[int, int] = {}  # hole index -> position in its list of enclosing methods
     t_enclose = t_initial = 0.0
+    first = True
+    seam_prev: dict[int, float] = {}  # hole -> seam angle of its planar patch (seam trial)
+    locked: set[int] = set()
+    revert: list[int] = []
     while True:
         ta = time.perf_counter()
         method = {h.index: _enclose_methods(h)[stage.get(h.index, 0)] for h in holes}
-        V1, F1, reports = enclose_holes(V, F, holes, skip, edge_length=edge_length, check=check,
-                                        intersections=False, method=method)
+        if first:
+            routes = find_crease_routes(V, F, holes, skip, th) if creases else {}
+            sharp_v = np.flatnonzero(_sharp_vertices(V, F, th, nV))
+        V1, F1, reports = enclose_holes(
+            V, F, holes, skip, edge_length=edge_length, check=check, intersections=False,
+            method=method, creases=routes,
+            progress=None if progress is None or not first else progress)
+        first = False
         tb = time.perf_counter()
         Vm = V1
         if initial == "bilaplacian" and len(V1) > nV:
-            V1 = fair_vertices(V1, F1, np.arange(nV, len(V1)), order=2, weights="cotan",
-                               iterations=3)
+            ce = _crease_edges(reports)
+            on_crease = np.unique(ce)
+            free = np.setdiff1d(np.arange(nV, len(V1)), on_crease)
+            V1 = fair_vertices(V1, F1, free, order=2, weights="cotan", iterations=3,
+                               exclude_rows=on_crease, curvature=curvature,
+                               curvature_exclude=sharp_v)
+            V1 = _finite_rows(V1, Vm, np.arange(nV, len(V1)), "the thin-plate fairing")
         drop: dict[int, str] = {}
         retry: list[int] = []
         if check:
             dropped = np.zeros(len(F1), bool)  # faces of patches already refused
-            for i, (bv, bf) in _blocks(reports, nV, nF).items():
-                rep = next(r for r in reports if r.index == i)
-                n_x = _intersecting(V1, F1, bf, dropped)
+            blocks = _blocks(reports, nV, nF)
+            all_new = np.arange(nF, len(F1))
+            pairs0 = self_intersections(V1, F1, all_new) if len(all_new) else None
+            by_rep = {r.index: r for r in reports}
+            for i, (bv, bf) in blocks.items():
+                rep = by_rep[i]
+                n_x = _intersecting(V1, F1, bf, dropped, pairs=pairs0)
                 if n_x and initial == "bilaplacian":
+                    # keep as much of the fairing as stays clear of the surround: the patch
+                    # moved back towards its initial surface by halves, then the initial one
                     unfaired = "unfaired" if method[i] == "liepa" else "membrane"
-                    log.info("hole %d: the faired patch intersects the mesh; using the %s", i,
-                             "unfaired surface" if unfaired == "unfaired" else "membrane")
+                    Vf = V1[bv].copy()
                     V1 = V1.copy()
-                    V1[bv] = Vm[bv]
-                    n_x = _intersecting(V1, F1, bf, dropped)
-                    if not n_x:
-                        rep.reason += f", {unfaired}"
+                    for frac in BLEND_STEPS:
+                        V1[bv] = Vm[bv] + frac * (Vf - Vm[bv])
+                        n_x = _intersecting(V1, F1, bf, dropped)
+                        if not n_x:
+                            log.info("hole %d: the faired patch intersects the mesh; kept %g of "
+                                     "the fairing", i, frac)
+                            rep.reason += f", {frac:g} faired"
+                            break
+                    if n_x:
+                        log.info("hole %d: the faired patch intersects the mesh; using the %s",
+                                 i, "unfaired surface" if unfaired == "unfaired" else "membrane")
+                        V1[bv] = Vm[bv]
+                        n_x = _intersecting(V1, F1, bf, dropped)
+                        if not n_x:
+                            rep.reason += f", {unfaired}"
                 if not n_x:
+                    # choose by measurement: a planar patch meeting its surround at a kink is
+                    # tried again with Liepa's triangulation, and the smoother seam is kept
+                    if i in seam_prev and method[i] == "liepa" and i not in locked:
+                        seam = _seam_angle(V1, F1, bf, nF)
+                        if not seam < seam_prev[i]:
+                            log.info("hole %d: the minimum-weight patch's seam (%.1f°) is no "
+                                     "smoother than the planar one (%.1f°); keeping the planar",
+                                     i, seam, seam_prev[i])
+                            revert.append(i)
+                        locked.add(i)
+                    elif (initial == "bilaplacian" and method[i] == "auto" and i not in locked
+                          and rep.n_creases == 0 and not rep.reason.startswith("annulus")
+                          and len(_enclose_methods(by_index[i])) > 1):
+                        seam, ring = _seam_angle(V1, F1, bf, nF, ring=True)
+                        if seam > SEAM_RETRY_FACTOR * ring + SEAM_RETRY_MARGIN:
+                            log.info("hole %d: the planar patch meets its surround at %.1f° "
+                                     "(surround %.1f°); trying the minimum-weight "
+                                     "triangulation", i, seam, ring)
+                            seam_prev[i] = seam
+                            retry.append(i)
+                    continue
+                if i in seam_prev and method[i] == "liepa" and i not in locked:
+                    locked.add(i)  # the seam trial intersects: back to the planar patch
+                    revert.append(i)
                     continue
                 dropped[bf] = True
                 nxt = stage.get(i, 0) + 1
@@ -281,10 +438,13 @@ def _fill_core(V: np.ndarray, F: np.ndarray, holes, skip: dict[int, str], *, den
                            "keep_border); exclude it or fill it manually")
         t_enclose += tb - ta
         t_initial += time.perf_counter() - tb
-        if not retry:
+        if not retry and not revert:
             break
         for i in retry:
             stage[i] = stage.get(i, 0) + 1
+        for i in revert:
+            stage[i] = 0
+        revert = []
     if drop:
         V1, F1 = _drop_patches(V1, F1, reports, nV, nF, drop)
     t2 = time.perf_counter()
@@ -297,11 +457,14 @@ def _fill_core(V: np.ndarray, F: np.ndarray, holes, skip: dict[int, str], *, den
     patch_edges[topo.face_edges[new_f].ravel()] = True
     edge_force = np.full(topo.n_edges, -1, np.int8)
     edge_force[patch_edges] = 0
+    crease_e = _edge_ids(topo, _crease_edges(reports), len(V1))
+    edge_force[crease_e] = 1  # routed creases: the MC penalty rebuilds them sharp
     history: list[dict] = []
     iterations = 0
     stop_reason = "no solve"
     params: dict = {"denoise": denoise, "initial": initial, "refine": refine, "th": th}
     M_E = sharp_edge_mask(face_normals(V1, F1), topo, th).astype(bool) & ~patch_edges
+    M_E[crease_e] = True
     V_before = V1
     if denoise:
         from .denoise import default_stages, lambda_from_noise
@@ -330,6 +493,9 @@ def _fill_core(V: np.ndarray, F: np.ndarray, holes, skip: dict[int, str], *, den
         topo_l = edge_topology(Fl, len(used))
         ef = np.full(topo_l.n_edges, -1, np.int8)
         ef[topo_l.face_edges[fidx >= nF].ravel()] = 0
+        ce = _crease_edges(reports)
+        if len(ce):
+            ef[_edge_ids(topo_l, loc[ce], len(used))] = 1
         stage = Stage(a=a, eps=1.2, beta2_ratio=5.0, mask="none", max_iter=max_iter,
                       min_iter=min(max_iter, 30), relax=relax, name="fill")
         opts = SolverOptions(lam=1.0, th=th, stages=(stage,), tol=tol, inner_solver=inner_solver,
@@ -339,13 +505,16 @@ def _fill_core(V: np.ndarray, F: np.ndarray, holes, skip: dict[int, str], *, den
         res = solver.solve(V1[used], callback=callback)
         V1 = V1.copy()
         V1[used[~fixed]] = res.V[~fixed]
+        V1 = _finite_rows(V1, V_before, new_v, "the ADMM solve")
         history, iterations, stop_reason = res.history, res.iterations, res.stop_reason
         params.update(rings=rings, max_iter=max_iter, relax=relax)
     t3 = time.perf_counter()
     if check:
+        pairs1 = self_intersections(V1, F1, new_f) if len(new_f) else None
+        by_rep = {r.index: r for r in reports}
         for i, (bv, bf) in _blocks(reports, nV, nF).items():
-            rep = next(r for r in reports if r.index == i)
-            rep.n_intersections = _intersecting(V1, F1, bf)
+            rep = by_rep[i]
+            rep.n_intersections = _intersecting(V1, F1, bf, pairs=pairs1)
             if rep.n_intersections and not denoise and V1 is not V_before:
                 V1[bv] = V_before[bv]
                 rep.n_intersections = _intersecting(V1, F1, bf)
@@ -364,13 +533,10 @@ def _fill_core(V: np.ndarray, F: np.ndarray, holes, skip: dict[int, str], *, den
     )
 
 
-def _check_options(initial: str, max_iter: int, rings: int) -> None:
+def _check_options(initial: str, max_iter: int, rings: int, **numeric) -> None:
     if initial not in INITIAL_MODES:
         raise MeshRepairError(f"initial must be one of {INITIAL_MODES}, got {initial!r}")
-    if isinstance(max_iter, bool) or int(max_iter) != max_iter or max_iter < 0:
-        raise MeshRepairError(f"max_iter must be a non-negative integer, got {max_iter!r}")
-    if isinstance(rings, bool) or int(rings) != rings or rings < 1:
-        raise MeshRepairError(f"rings must be an integer >= 1, got {rings!r}")
+    check_fill_options(max_iter=max_iter, rings=rings, **numeric)
 
 
 # ------------------------------------------------------------------------------------------------
@@ -401,6 +567,9 @@ def fill_holes(
     inner_iters: int = 3,
     check: bool = True,
     callback: Callable[[dict], None] | None = None,
+    progress: Callable[[int, int], None] | None = None,
+    creases: bool = True,
+    curvature: bool = True,
 ) -> FillResult:
     """Fill the holes of a triangle mesh smoothly, optionally denoising it in the same solve.
 
@@ -412,6 +581,9 @@ def fill_holes(
         Fill only holes with at most this many boundary vertices (= edges).
     keep_border : bool
         Leave the longest loop open (the intended border of a scan or of a model cut open).
+        Independently of it, a loop recognised as the open border of its surface by its size
+        (:func:`meshrepair.holes.border.find_borders`) is left open with the reason, unless it
+        is listed in ``holes``.
     exclude : sequence of int
         Hole indices (see :func:`meshrepair.holes.find_holes`: longest first) to leave open.
     holes : sequence of int, optional
@@ -449,6 +621,17 @@ def fill_holes(
         (``HoleReport.reason`` says which was kept: e.g. ``"plane"``, ``"plane, membrane"``,
         ``"liepa"``, ``"liepa, unfaired"``) before the hole is refused.
     callback : called with each ADMM history entry.
+    progress : called as ``progress(done, total)`` before each selected hole is enclosed (the
+        CLI feeds a progress bar over holes with it).
+    creases : bool
+        Continue the sharp creases (dihedral angle above ``th``) that end on a hole's loop
+        through the patch: paired across the hole or meeting at a corner, routed as
+        constrained edges, placed on their curves and kept sharp by the MC penalty
+        (:mod:`meshrepair.holes.creases`; ``HoleReport.n_creases``).
+    curvature : bool
+        With ``initial="bilaplacian"``: curvature continuity (the patch's Laplacian fitted to
+        the surround's mean curvature interpolated over it, :func:`meshrepair.holes.fair_vertices`
+        ``curvature=True``); False gives the plain thin plate.
 
     Returns
     -------
@@ -460,23 +643,31 @@ def fill_holes(
     ------
     MeshRepairError
         For invalid meshes (:func:`meshrepair.validate.check_mesh`) or options (e.g. a hole index
-        that does not exist).
+        that does not exist, a non-finite or out-of-range number), or when the selected holes
+        would need more than :data:`meshrepair.holes.budget.MAX_NEW_FACES` new faces (estimated
+        before any work; the message gives the count).
     """
     from .holes import _find_holes
+    from .holes.border import find_borders
     from .io import as_arrays
     from .validate import check_mesh
 
     V, F = as_arrays(V, F)
     check_mesh(V, F, name="input mesh")
-    _check_options(initial, max_iter, rings)
+    _check_options(initial, max_iter, rings, edge_length=edge_length, lam=lam, th=th, a=a,
+                   tol=tol, relax=relax, inner_iters=inner_iters)
     found = _find_holes(V, F)
+    borders = find_borders(V, F, found)
     skip = select_holes(found, max_hole_size=max_hole_size, keep_border=keep_border,
-                        exclude=exclude, indices=holes)
-    log.info("fill_holes: %d holes found, %d selected", len(found), len(found) - len(skip))
+                        exclude=exclude, indices=holes, borders=borders)
+    check_budget([h for h in found if h.index not in skip], edge_length, what="fill_holes")
+    log.info("fill_holes: %d holes found, %d selected%s", len(found), len(found) - len(skip),
+             f" ({len(borders)} open border(s) left open)" if borders else "")
     res = _fill_core(V, F, found, skip, denoise=denoise, initial=initial, refine=refine,
                      edge_length=edge_length, lam=lam, th=th, a=a, max_iter=int(max_iter),
                      tol=tol, rings=int(rings), relax=relax, inner_solver=inner_solver,
-                     inner_iters=inner_iters, check=check, callback=callback)
+                     inner_iters=inner_iters, check=check, callback=callback,
+                     progress=progress, creases=creases, curvature=curvature)
     res.params.update(max_hole_size=max_hole_size, keep_border=keep_border,
                       exclude=list(exclude), holes=None if holes is None else list(holes))
     return res
@@ -644,6 +835,9 @@ def inpaint(
     inner_iters: int = 3,
     check: bool = True,
     callback: Callable[[dict], None] | None = None,
+    progress: Callable[[int, int], None] | None = None,
+    creases: bool = True,
+    curvature: bool = True,
 ) -> FillResult:
     """Replace a damaged region of a mesh by a smooth patch.
 
@@ -659,7 +853,7 @@ def inpaint(
     region : vertex indices, a bool (or 0/1) mask of length nV, ``("sphere", center, radius)`` or
         ``("box", lo, hi)`` (see :func:`region_mask`).
     denoise, initial, refine, edge_length, lam, th, a, max_iter, tol, rings, relax, inner_solver,
-    inner_iters, check, callback : as in :func:`fill_holes`.
+    inner_iters, check, callback, progress, creases, curvature : as in :func:`fill_holes`.
 
     Returns
     -------
@@ -680,7 +874,8 @@ def inpaint(
 
     V, F = as_arrays(V, F)
     check_mesh(V, F, name="input mesh")
-    _check_options(initial, max_iter, rings)
+    _check_options(initial, max_iter, rings, edge_length=edge_length, lam=lam, th=th, a=a,
+                   tol=tol, relax=relax, inner_iters=inner_iters)
     nV, _nF = len(V), len(F)
     vmask = region_mask(V, region)
     if not vmask.any():
@@ -728,10 +923,12 @@ def inpaint(
             skip[h.index] = (f"the region cuts the mesh into {n_parts} parts; filling each cut "
                              "separately would cap the parts instead of rejoining them: use a "
                              "region that does not go all the way round")
+    check_budget([h for h in found if h.index not in skip], edge_length, what="inpaint")
     res = _fill_core(V2, F2, found, skip, denoise=denoise, initial=initial, refine=refine,
                      edge_length=edge_length, lam=lam, th=th, a=a, max_iter=int(max_iter),
                      tol=tol, rings=int(rings), relax=relax, inner_solver=inner_solver,
-                     inner_iters=inner_iters, check=check, callback=callback)
+                     inner_iters=inner_iters, check=check, callback=callback,
+                     progress=progress, creases=creases, curvature=curvature)
     res.vertex_map = vmap
     res.removed_faces = np.flatnonzero(removed).astype(np.int64)
     res.params.update(region_vertices=int(vmask.sum()), removal_notes=notes)

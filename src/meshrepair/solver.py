@@ -30,9 +30,11 @@ import numpy as np
 from . import _fused
 from . import _kernels as _k
 from ._memory import heap_allocations
+from .fidelity import prox_group_l1, tangential_anchor
 from .inner import INNER_SOLVERS, InnerState, VSubproblem, run_inner
 from .linear import N_SOLVERS, NormalSystem, solve_normals
 from .penalties import mc_penalty, t_update
+from .priors import reg_energy_mixed, t_update_mixed
 from .relax import TangentialRelaxer
 from .topology import Topology, edge_topology
 
@@ -55,6 +57,8 @@ class Stage:
     switch_tol : leave the stage when the relative change of V is below this (after ``min_iter``).
     min_iter : minimum number of iterations.
     relax : tangential relaxation weight per iteration (0 disables).
+    flat_a : MC non-convexity on the non-sharp edges of the solver's ``flat_edges`` (the
+        flat-TV class of :mod:`meshrepair.priors`; 0: edge-Willmore there as in the paper).
     name : label shown in the history.
     """
 
@@ -66,6 +70,7 @@ class Stage:
     switch_tol: float = 0.0
     min_iter: int = 1
     relax: float = 0.0
+    flat_a: float = 0.0
     name: str = "stage"
 
     @property
@@ -93,6 +98,8 @@ class SolverOptions:
     mask_source : ``"N"`` (the ADMM normal variable, less noisy) or ``"V"`` (normals of the mesh).
     precondition : Jacobi-precondition the Armijo V-descent (a per-vertex step): a few sliver or
         folded faces otherwise force a tiny global step and stall the whole mesh.
+    huber_delta : threshold δ (mean edge lengths) of the robust Huber fidelity of
+        :mod:`meshrepair.fidelity` (0: the paper's quadratic fidelity).
     min_feature_edges : an adaptive mask keeps only sharp edges in connected chains of at least
         this many sharp edges (1 keeps all). Real creases are long lines; what residual noise
         marks sharp is scattered in short pieces.
@@ -112,6 +119,7 @@ class SolverOptions:
     mask_source: str = "N"
     min_feature_edges: int = 1
     precondition: bool = True
+    huber_delta: float = 0.0
 
     def validate(self) -> None:
         from .errors import MeshRepairError
@@ -125,6 +133,9 @@ class SolverOptions:
             raise MeshRepairError(f"lam must be a finite number >= 0, got {self.lam}")
         if not 0 < self.th < 180:
             raise MeshRepairError(f"th must be an angle in (0, 180) degrees, got {self.th}")
+        if not (np.isfinite(self.huber_delta) and self.huber_delta >= 0):
+            raise MeshRepairError(f"huber_delta must be a finite number >= 0, got "
+                                  f"{self.huber_delta}")
         if not self.stages:
             raise MeshRepairError("at least one stage is needed")
         for s in self.stages:
@@ -195,13 +206,17 @@ class ADMMSolver:
         Per-edge override of M_E aligned with ``self.topo.edges``: -1 free (the stage decides),
         0 always smooth (Willmore), 1 always sharp (MC).
     fixed : (nV,) bool, optional, vertices that never move.
+    flat_edges : (nE,) bool, optional, the edges of the flat-TV class (stages with ``flat_a``).
+    anchor : (nV,) float in [0, 1], optional, weight of the tangential anchor
+        (:func:`meshrepair.fidelity.tangential_anchor`) applied after every V-step.
     options : SolverOptions
     topo : Topology, optional (precomputed)
     """
 
     def __init__(self, F: np.ndarray, n_vertices: int, *, M_V: np.ndarray | None = None,
                  edge_force: np.ndarray | None = None, fixed: np.ndarray | None = None,
-                 options: SolverOptions | None = None, topo: Topology | None = None):
+                 options: SolverOptions | None = None, topo: Topology | None = None,
+                 flat_edges: np.ndarray | None = None, anchor: np.ndarray | None = None):
         self.options = options or SolverOptions()
         self.options.validate()
         self.F = np.asarray(F, dtype=np.int64)
@@ -211,6 +226,9 @@ class ADMMSolver:
         self.edge_force = (np.full(self.topo.n_edges, -1, np.int8) if edge_force is None
                            else np.asarray(edge_force, dtype=np.int8))
         self.fixed = None if fixed is None else np.asarray(fixed, dtype=bool)
+        self.flat_edges = None if flat_edges is None else np.asarray(flat_edges, dtype=bool)
+        self.anchor = (None if anchor is None or not np.any(anchor)
+                       else np.asarray(anchor, dtype=np.float64))
         self.vsub = VSubproblem(self.F, nV, fixed=self.fixed)
         self._relaxer: TangentialRelaxer | None = None  # built on first use (stage.relax > 0)
         # only interior edges carry a normal jump: t, rho1 live on them
@@ -219,6 +237,8 @@ class ADMMSolver:
         self.fa = np.ascontiguousarray(self.topo.edge_faces[self.ie, 0])
         self.fb = np.ascontiguousarray(self.topo.edge_faces[self.ie, 1])
         self.nsys = NormalSystem(self.fa, self.fb, self.topo.n_faces)
+        self._flat_int = (None if self.flat_edges is None or not self.flat_edges.any()
+                          else self.flat_edges[self.ie])
 
     @property
     def relaxer(self) -> TangentialRelaxer:
@@ -330,8 +350,15 @@ class ADMMSolver:
                         sh = sharp[self.ie]
                     # (17) t-update
                     DN = _k.grad_edges(N, l, fa, fb)
-                    t = t_update(DN, rho1, sh, a=stage.a, beta1=beta1,
-                                 willmore_weight=o.willmore_weight)
+                    mixed = stage.flat_a > 0 and self._flat_int is not None
+                    if mixed:
+                        fl = self._flat_int
+                        t = t_update_mixed(DN, rho1, sh, fl, a=stage.a, a_flat=stage.flat_a,
+                                           beta1=max(beta1, 1.01 * stage.flat_a),
+                                           willmore_weight=o.willmore_weight)
+                    else:
+                        t = t_update(DN, rho1, sh, a=stage.a, beta1=beta1,
+                                     willmore_weight=o.willmore_weight)
                     # (18) N-update via (25), then normalise
                     c = beta2 / beta1
                     B = _k.rhs(c, Nv, rho2, beta1, t, rho1, l, fa, fb)
@@ -341,8 +368,15 @@ class ADMMSolver:
                         N, _ = self.nsys.solve_cg(l * l, c, B, N, rtol=o.n_rtol)
                     N, z = _k.normalize_z(N, Nv, rho2, beta2)
                     # (19) V-update: inner solver on (26), warm-started
-                    self.vsub.set(X0, fid, z)
+                    if o.huber_delta > 0:  # outlier offsets S: prox of δ||.||, fidelity.py
+                        S = prox_group_l1(V - X0, o.huber_delta)
+                        Xd = X0 + S
+                    else:
+                        Xd = X0
+                    self.vsub.set(Xd, fid, z)
                     Vn = run_inner(o.inner_solver, self.vsub, V, o.inner_iters, state)
+                    if self.anchor is not None:
+                        Vn = tangential_anchor(Vn, X0, F, self.anchor)
                     if stage.relax > 0:
                         Vn = self.relaxer.step(Vn, sharp, stage.relax)
                     # (20)-(21) multipliers (D with the lengths of V^(k), as in the N-update)
@@ -353,10 +387,19 @@ class ADMMSolver:
                     k += 1
                     l, reg = _fused.lengths_reg_energy(V, E_int, Nv, fa, fb, sh, stage.a,
                                                        o.willmore_weight)
+                    if mixed:  # flat-TV edges: replace their Willmore value by the MC value
+                        f = np.flatnonzero(fl & ~sh)
+                        tf = l[f, None] * (Nv[fa[f]] - Nv[fb[f]])
+                        reg += reg_energy_mixed(tf, np.zeros(len(f), bool), np.ones(len(f), bool),
+                                                a=stage.a, a_flat=stage.flat_a,
+                                                willmore_weight=o.willmore_weight)
+                        reg -= o.willmore_weight * float(np.einsum("ij,ij->", tf, tf))
                     entry = {
                         "iter": k,
                         "stage": stage.name,
-                        "energy": reg + 0.5 * _k.sqdist(V, X0, fid),
+                        "energy": reg + 0.5 * _k.sqdist(V, Xd, fid) + (
+                            o.huber_delta * float(fid @ np.linalg.norm(Xd - X0, axis=1))
+                            if o.huber_delta > 0 else 0.0),
                         "rel_change": float(rel),
                         "res_t": float(np.sqrt(res_t / max(len(fa), 1))),
                         "res_N": float(np.sqrt(res_n / nF)),
@@ -392,4 +435,4 @@ class ADMMSolver:
         """A solver on the same connectivity with some options changed (reuses the topology)."""
         return ADMMSolver(self.F, self.topo.n_vertices, M_V=self.M_V, edge_force=self.edge_force,
                           fixed=self.fixed, options=replace(self.options, **changes),
-                          topo=self.topo)
+                          topo=self.topo, flat_edges=self.flat_edges, anchor=self.anchor)

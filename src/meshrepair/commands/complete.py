@@ -6,6 +6,9 @@ Examples
 ``meshrepair complete damaged.ply patch.ply out.ply --region region.txt --mode adaptive``
 
 ``meshrepair complete scan.ply patch.ply out.ply --hole 0 --transform place.txt``
+
+``meshrepair complete damaged.ply out.ply --region region.txt --mirror`` (the template is the
+mirror image of the region's counterpart across the mesh's symmetry plane)
 """
 
 from __future__ import annotations
@@ -75,22 +78,40 @@ def run_complete(args: argparse.Namespace) -> int:
     from ..complete import complete, extract_patch
     from ..io import read_mesh, write_mesh
 
+    paths = list(args.paths)
+    if args.mirror:
+        if len(paths) != 1:
+            raise MeshRepairError("with --mirror give IN OUT only (the template is the mirrored "
+                                  f"counterpart of the region), got {len(paths)} paths after IN")
+        if args.template_region is not None or args.transform is not None:
+            raise MeshRepairError("--mirror finds the template itself: drop --template-region "
+                                  "and --transform")
+        args.template, args.output = None, paths[0]
+    else:
+        if len(paths) != 2:
+            raise MeshRepairError("give IN TEMPLATE OUT (or IN OUT --mirror for symmetric "
+                                  f"completion), got {len(paths) + 1} paths")
+        args.template, args.output = paths
     out = _check_output(args.output, [args.input, args.template, args.region, args.transform,
                                       args.template_region, args.log], args.force)
     if args.log is not None and Path(args.log).suffix.lower() != ".json":
         raise MeshRepairError(f"--log {args.log!r} must be a .json file")
     t0 = time.perf_counter()
     mesh = read_mesh(args.input)
-    tmesh = read_mesh(args.template)
-    if args.template_region is not None:
+    tmesh = read_mesh(args.template) if args.template is not None else None
+    if tmesh is None:
+        template = "mirror"
+    elif args.template_region is not None:
         sel = _selection(args.template_region, tmesh.V, tmesh.F)
         if "region" in sel:
-            template = extract_patch(tmesh.V, tmesh.F, sel["region"])
+            faces = sel["region"]
         else:
             faces = np.flatnonzero(sel["region_vertices"][tmesh.F].all(axis=1))
             if faces.size == 0:
                 raise MeshRepairError("--template-region selects no face of the template")
-            template = extract_patch(tmesh.V, tmesh.F, faces)
+        extract_patch(tmesh.V, tmesh.F, faces)  # a clear error for an empty/invalid selection
+        # a piece of a mesh: its context rings around the selection take part in the alignment
+        template = (tmesh.V, tmesh.F, faces)
     else:
         template = (tmesh.V, tmesh.F)
     kw: dict = {}
@@ -99,10 +120,13 @@ def run_complete(args: argparse.Namespace) -> int:
     else:
         kw["hole"] = args.hole
     t_read = time.perf_counter() - t0
-    res = complete(mesh.V, mesh.F, template=template, transform=args.transform,
-                   strip_rings=args.strip_rings, mode=args.mode, allow_scale=args.allow_scale,
-                   orientation=args.orientation, icp=args.icp, iterations=args.iterations,
-                   th=args.th, denoise=args.denoise, **kw)
+    from .common import ProgressBar
+
+    bar = ProgressBar(args.iterations, "blend", enabled=not args.quiet)
+    try:
+        res = _run(complete, mesh, template, args, kw, bar)
+    finally:
+        bar.close()
     t_solve = time.perf_counter() - t0 - t_read
     attrs = None
     if out.suffix.lower() == ".ply":
@@ -119,29 +143,71 @@ def run_complete(args: argparse.Namespace) -> int:
         run = {
             "history": res.history,
             "parameters": {**res.params, "input": str(args.input),
-                           "template": str(args.template)},
+                           "template": str(args.template) if args.template else "mirror"},
             "timings": {"read": t_read, "complete": t_solve,
                         "total": time.perf_counter() - t0},
             "metrics": {"seam vertices": c["n_seam"], "rms boundary before": c["rms_before"],
                         "rms boundary after": c["rms_after"], "strip vertices":
                         int(len(res.strip_vertices)), "iterations": res.iterations},
             "correspondence": corr,
+            "alignment": res.alignment,
+            "symmetry": _jsonable(res.symmetry),
         }
         Path(args.log).write_text(json.dumps(run, indent=1), encoding="utf-8")
     print(f"wrote {out}: {len(res.V)} vertices, {len(res.F)} faces; seam {c['n_seam']} vertices "
           f"(hole {c['n_hole']}, template {c['n_template']}), boundary RMS {c['rms_before']:.3g} "
           f"-> {c['rms_after']:.3g}, {res.iterations} iterations "
           f"({time.perf_counter() - t0:.2f} s)")
+    print(alignment_summary(res))
     from .common import write_run_report
 
+    tmpl_v = np.zeros(len(res.V), bool)
+    tmpl_v[res.template_vertices] = True
+    a = res.alignment
     write_run_report(
         args.report, title=f"meshrepair complete {Path(args.input).name}",
+        highlight=tmpl_v[res.F].all(axis=1), highlight_label="template faces",
+        sharp_mask=res.M_E,
         input_mesh=(mesh.V, mesh.F), output_mesh=(res.V, res.F),
         masks={"M_V": res.M_V, "M_E": res.M_E}, history=res.history, parameters=res.params,
         metrics={"seam vertices": c["n_seam"], "rms boundary before": c["rms_before"],
-                 "rms boundary after": c["rms_after"], "iterations": res.iterations},
+                 "rms boundary after": c["rms_after"], "iterations": res.iterations,
+                 "alignment residual boundary (l)": a["boundary_rms"],
+                 "alignment residual context (l)": ("n/a" if a["context_rms"] is None
+                                                    else a["context_rms"])},
         timings={"total": time.perf_counter() - t0})
     return 0
+
+
+def _run(complete, mesh, template, args, kw, bar):
+    return complete(mesh.V, mesh.F, template=template, transform=args.transform,
+                    strip_rings=args.strip_rings, mode=args.mode, allow_scale=args.allow_scale,
+                    orientation=args.orientation, icp=args.icp, iterations=args.iterations,
+                    th=args.th, denoise=args.denoise,
+                    max_symmetry_residual=args.max_symmetry_residual, callback=bar, **kw)
+
+
+def _jsonable(d):
+    if d is None:
+        return None
+    return {k: (v.tolist() if isinstance(v, np.ndarray) else v) for k, v in d.items()}
+
+
+def alignment_summary(res) -> str:
+    """One line: the alignment residuals (and the symmetry plane) in mean edge lengths."""
+    a = res.alignment
+    ctx = ("no template context" if a.get("context_rms") is None
+           else f"context rings {a['context_rms']:.3g} (max {a['context_max']:.3g})")
+    line = (f"alignment residual (mean edge lengths): boundary {a['boundary_rms']:.3g} (max "
+            f"{a['boundary_max']:.3g}), {ctx}")
+    if a.get("warning"):
+        line += " -- LARGE: check the template"
+    if res.symmetry is not None:
+        s = res.symmetry
+        n = np.round(np.asarray(s["normal"]), 4).tolist()
+        line += (f"\nsymmetry plane: normal {n}, offset {s['offset']:.6g}; symmetry residual "
+                 f"{s['residual']:.3g} mean edge lengths")
+    return line
 
 
 def register(subparsers) -> None:
@@ -151,13 +217,19 @@ def register(subparsers) -> None:
     p = subparsers.add_parser(
         "complete",
         help="replace a region (or fill a hole) with a template patch and blend the seam",
+        usage="meshrepair complete IN [TEMPLATE] OUT (--region FILE | --hole K) [--mirror] "
+        "[options]",
         description="Context-aware completion: remove the region of IN given by --region (or "
         "use the existing hole --hole K), align TEMPLATE (a mesh with exactly one boundary "
-        "loop) to it, stitch it in and blend the seam strip with the variational model.",
+        "loop) to it, stitch it in and blend the seam strip with the variational model. With "
+        "--mirror (IN OUT only) the template is the region's mirrored counterpart across the "
+        "mesh's symmetry plane.",
     )
     p.add_argument("input", help="mesh to complete (PLY, OBJ, OFF, STL)")
-    p.add_argument("template", help="template patch: a mesh file with one boundary loop")
-    p.add_argument("output", help="mesh file to write (PLY also stores m_v, strip, template)")
+    p.add_argument("paths", nargs="+", metavar="[TEMPLATE] OUT",
+                   help="TEMPLATE: a template patch (a mesh file with one boundary loop; "
+                   "omitted with --mirror); OUT: mesh file to write (PLY also stores m_v, "
+                   "strip, template)")
     g = p.add_mutually_exclusive_group(required=True)
     g.add_argument("--region", metavar="FILE",
                    help="faces to replace: a text file of face indices, or a .ply/.npy "
@@ -166,6 +238,13 @@ def register(subparsers) -> None:
                    help="complete the existing boundary loop K (0 = longest) instead")
     p.add_argument("--template-region", metavar="FILE", default=None,
                    help="use only these faces of TEMPLATE (same formats as --region)")
+    p.add_argument("--mirror", action="store_true",
+                   help="symmetric completion: the template is the mirror image of the "
+                   "region's counterpart across the mesh's symmetry plane (refused when the "
+                   "mesh is not symmetric enough)")
+    p.add_argument("--max-symmetry-residual", type=float, default=0.1, metavar="L",
+                   help="with --mirror: largest accepted symmetry residual in mean edge "
+                   "lengths (default 0.1)")
     p.add_argument("--strip-rings", type=int, default=2, metavar="K",
                    help="width of the blending strip in edge rings on each side (default 2)")
     p.add_argument("--mode", choices=MODES, default="adaptive",
@@ -179,7 +258,9 @@ def register(subparsers) -> None:
     p.add_argument("--orientation", choices=ORIENTATIONS, default="template",
                    help="trust the template's face orientation (default) or try both")
     p.add_argument("--icp", choices=ICP_MODES, default="auto",
-                   help="alignment refinement (default auto)")
+                   help="alignment refinement (default auto = context: the hole's boundary and "
+                   "the intact rings around it, never the region's faces; 'surface' also fits "
+                   "the region's faces, for an undamaged region)")
     p.add_argument("--iterations", type=int, default=80, metavar="N",
                    help="ADMM iterations of the blending (default 80)")
     p.add_argument("--th", type=float, default=30.0, metavar="DEG",
@@ -190,6 +271,7 @@ def register(subparsers) -> None:
                    help="write history, parameters, timings and correspondence as JSON "
                    "(readable by 'meshrepair report --log')")
     p.add_argument("--force", action="store_true", help="overwrite OUTPUT if it exists")
+    p.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
     from .common import add_report_option
 
     add_report_option(p)

@@ -63,8 +63,18 @@ def _write(out: Path, res, log_path: str | None, extra: dict) -> None:
 def _report(args: argparse.Namespace, res, m) -> None:
     from .common import write_run_report
 
+    if not args.report:
+        return
+    from ..viewer.content import hole_regions
+
+    highlight = np.zeros(len(res.F), bool)
+    highlight[res.new_faces] = True
+    regions, details = hole_regions(res.V, res.F, res.holes)
     write_run_report(
         args.report, title=f"meshrepair {args.command} {Path(args.input).name}",
+        holes=[h.as_dict() for h in res.holes], highlight=highlight,
+        highlight_label="inpainted faces" if args.command == "inpaint" else "filled faces",
+        regions=regions, region_details=details, sharp_mask=res.M_E,
         input_mesh=(m.V, m.F), output_mesh=(res.V, res.F),
         masks={"filled_V": res.filled_mask, "M_E": res.M_E}, history=res.history,
         parameters=res.params, timings=res.timings,
@@ -90,10 +100,10 @@ def run_fill(args: argparse.Namespace) -> int:
             print(f"  hole {h.index}: {h.n_boundary} boundary edges, length {h.length:.6g}"
                   f"{', pinched' if h.pinched else ''}")
         return 0
-    return _solve_and_write(args, m, out, "fill", lambda cb: fill_holes(
+    return _solve_and_write(args, m, out, "fill", lambda cb, hp: fill_holes(
         m.V, m.F, max_hole_size=args.max_hole_size, keep_border=args.keep_border,
         exclude=args.exclude or (), holes=args.holes, denoise=args.denoise,
-        initial=args.initial, refine=not args.no_refine, callback=cb))
+        initial=args.initial, refine=not args.no_refine, callback=cb, progress=hp))
 
 
 def run_inpaint(args: argparse.Namespace) -> int:
@@ -111,26 +121,61 @@ def run_inpaint(args: argparse.Namespace) -> int:
     else:
         x0, y0, z0, x1, y1, z1 = _floats(args.box, 6, "--box")
         region = ("box", (x0, y0, z0), (x1, y1, z1))
-    return _solve_and_write(args, m, out, "inpaint", lambda cb: inpaint(
+    return _solve_and_write(args, m, out, "inpaint", lambda cb, hp: inpaint(
         m.V, m.F, region, denoise=args.denoise, initial=args.initial,
-        refine=not args.no_refine, callback=cb))
+        refine=not args.no_refine, callback=cb, progress=hp))
 
 
 def _solve_and_write(args: argparse.Namespace, m, out: Path, desc: str, solve) -> int:
-    """Run ``solve(callback)`` under a progress bar (none with ``--quiet``), print the per-hole
-    summary, write OUT (and ``--log``/``--report``); returns the exit code."""
+    """Run ``solve(callback, hole_progress)`` under progress bars (over holes, then over the
+    solve's iterations; none with ``--quiet``), print the per-hole summary, write OUT (and
+    ``--log``/``--report``); returns the exit code."""
     from .common import ProgressBar
 
-    bar = ProgressBar(None, desc, enabled=not args.quiet)
+    holes_bar = _HoleBar(f"{desc}: holes", enabled=not args.quiet)
+    bar = None
+
+    def iteration(entry):
+        nonlocal bar
+        if bar is None:
+            holes_bar.close()
+            bar = ProgressBar(None, desc, enabled=not args.quiet)
+        bar(entry)
+
     try:
-        res = solve(bar)
+        res = solve(iteration, holes_bar)
     finally:
-        bar.close()
+        holes_bar.close()
+        if bar is not None:
+            bar.close()
     print(res.summary())
     _write(out, res, args.log, {"input": args.input})
     print(f"wrote {out} ({len(res.V)} vertices, {len(res.F)} faces, {res.timings['total']:.2f} s)")
     _report(args, res, m)
     return 0
+
+
+class _HoleBar:
+    """A tqdm bar over the holes being enclosed, fed by ``progress(done, total)``; created on
+    the first call (so nothing is printed when no hole is filled or the input is refused)."""
+
+    def __init__(self, desc: str, enabled: bool = True):
+        self.desc, self.enabled, self.bar = desc, enabled, None
+
+    def __call__(self, done: int, total: int) -> None:
+        if not self.enabled:
+            return
+        if self.bar is None:
+            from tqdm import tqdm
+
+            self.bar = tqdm(total=total, desc=self.desc, unit="hole", leave=False)
+        self.bar.n = done
+        self.bar.refresh()
+
+    def close(self) -> None:
+        if self.bar is not None:
+            self.bar.close()
+            self.bar = None
 
 
 def _common(p: argparse.ArgumentParser) -> None:

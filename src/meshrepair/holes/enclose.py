@@ -1,0 +1,431 @@
+"""Enclosing several holes of one mesh: chords, islands (annuli), refusals."""
+
+from __future__ import annotations
+
+import logging
+from collections.abc import Callable, Mapping, Sequence
+
+import numpy as np
+
+from ..errors import MeshRepairError
+from ._geom2d import Patch, _plane_frame, _polygon_is_simple, _vector_area
+from .detect import Hole, HoleReport
+from .intersect import self_intersections
+from .planar import ENCLOSE_METHODS, _enclose_annulus, enclose_loop
+
+log = logging.getLogger(__name__)
+
+
+def _split_chords(patch: Patch, bad: set[tuple[int, int]]) -> Patch:
+    """Split the local edges in ``bad`` (pairs of local indices) at their midpoints."""
+    X, T, uv = patch.X.copy(), patch.T.copy(), patch.uv.copy()
+    sharp = [tuple(e) for e in patch.sharp_edges.tolist()]
+    for a, b in sorted(bad):
+        idx = np.flatnonzero((T == a).any(axis=1) & (T == b).any(axis=1))
+        if len(idx) != 2:
+            continue
+        m = len(X)
+        X = np.r_[X, 0.5 * (X[a] + X[b])[None]]
+        uv = np.r_[uv, 0.5 * (uv[a] + uv[b])[None]]
+        new = []
+        for f in idx:
+            t = T[f].tolist()
+            r = t.index(a)
+            t = t[r:] + t[:r]  # a first
+            if t[1] == b:  # (a, b, c) -> (a, m, c), (m, b, c)
+                new += [[a, m, t[2]], [m, b, t[2]]]
+            else:  # (a, c, b) -> (a, c, m), (m, c, b)
+                new += [[a, t[1], m], [m, t[1], b]]
+        T = np.r_[np.delete(T, idx, axis=0), np.asarray(new, dtype=np.int64)]
+        if (a, b) in sharp or (b, a) in sharp:
+            sharp = [e for e in sharp if set(e) != {a, b}] + [(a, m), (m, b)]
+    return Patch(X=X, T=T, uv=uv, method=patch.method, n_loop=patch.n_loop,
+                 sharp_edges=np.asarray(sharp, np.int64).reshape(-1, 2),
+                 n_creases=patch.n_creases)
+
+
+def _loop_side_points(V: np.ndarray, F: np.ndarray, loop: np.ndarray) -> np.ndarray:
+    """Centroids of the faces bordering the loop edges, shape ``(k, 3)``."""
+    sel = np.isin(F, loop).sum(axis=1) >= 2
+    Fs = F[sel]
+    third = {}
+    for f in Fs.tolist():
+        for j in range(3):
+            third[(f[j], f[(j + 1) % 3])] = f[(j + 2) % 3]
+    nxt = np.roll(loop, -1)
+    w = np.array([third.get((u, v), -1) for u, v in zip(loop.tolist(), nxt.tolist(),
+                                                          strict=True)])
+    ok = w >= 0
+    return (V[loop[ok]] + V[nxt[ok]] + V[w[ok]]) / 3.0
+
+
+def _nested_in(V: np.ndarray, F: np.ndarray, outer: Hole, inner: Hole) -> bool:
+    """True when loop ``inner`` lies inside the hole bounded by ``outer`` (an island)."""
+    Po, Pi = V[outer.vertices], V[inner.vertices]
+    lo, hi = Po.min(axis=0), Po.max(axis=0)
+    pad = 0.5 * float((hi - lo).max())
+    if (Pi < lo - pad).any() or (Pi > hi + pad).any():
+        return False
+    va = _vector_area(Po)
+    if not np.linalg.norm(va) > 0:
+        return False
+    n = -va / np.linalg.norm(va)
+    c = Po.mean(axis=0)
+    rad = float(np.linalg.norm(Po - c, axis=1).max())
+    if np.abs((Pi - c) @ n).max() > 0.5 * rad:
+        return False
+    e1, e2 = _plane_frame(n)
+
+    def proj(X):
+        return np.c_[(X - c) @ e1, (X - c) @ e2]
+
+    Qo, Qi = proj(Po), proj(Pi)
+    if not _polygon_is_simple(Qo):
+        return False
+    from matplotlib.path import Path as MPath
+
+    poly = MPath(Qo)
+    if not poly.contains_points(Qi).all():
+        return False
+    # a hole has its surface outside the loop (a border of a surface piece has it inside)
+    side = _loop_side_points(V, F, outer.vertices)
+    if len(side) == 0 or poly.contains_points(proj(side)).mean() > 0.5:
+        return False
+    # an island boundary turns the other way round than the hole it sits in
+    area_i = 0.5 * float(np.sum(Qi[:, 0] * np.roll(Qi[:, 1], -1) - np.roll(Qi[:, 0], -1)
+                                * Qi[:, 1]))
+    return area_i > 0
+
+
+def _opposite_points(V: np.ndarray, F: np.ndarray, loop: np.ndarray) -> np.ndarray:
+    """Third vertex of the face on each loop edge ``(loop[i], loop[i+1])``, ``(k, 3)`` (NaN rows
+    where the edge has no face traversing it in that direction)."""
+    n = np.int64(max(int(F.max(initial=0)), int(loop.max())) + 1)
+    he = np.stack([F, np.roll(F, -1, axis=1)], axis=2).reshape(-1, 2)
+    third = np.roll(F, -2, axis=1).ravel()
+    code = he[:, 0] * n + he[:, 1]
+    order = np.argsort(code, kind="stable")
+    code = code[order]
+    want = loop * n + np.roll(loop, -1)
+    pos = np.clip(np.searchsorted(code, want), 0, max(len(code) - 1, 0))
+    out = np.full((len(loop), 3), np.nan)
+    if len(code):
+        hit = code[pos] == want
+        out[hit] = V[third[order[pos[hit]]]]
+    return out
+
+
+def _loop_chords(F: np.ndarray, loop: np.ndarray) -> np.ndarray:
+    """Edges of ``F`` joining two non-consecutive loop vertices, as local pairs ``(q, 2)``."""
+    k = len(loop)
+    n = max(int(F.max(initial=0)), int(loop.max())) + 1
+    local = np.full(n, -1, np.int64)
+    local[loop] = np.arange(k)
+    Fs = F[(local[F] >= 0).sum(axis=1) >= 2]
+    e = local[np.r_[Fs[:, [0, 1]], Fs[:, [1, 2]], Fs[:, [2, 0]]]]
+    e = np.sort(e[(e >= 0).all(axis=1)], axis=1)
+    d = e[:, 1] - e[:, 0]
+    return np.unique(e[(d >= 2) & (d != k - 1)], axis=0)
+
+
+def _existing_edge_codes(F: np.ndarray, n: int) -> np.ndarray:
+    e = np.sort(np.concatenate([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]]), axis=1)
+    return np.unique(e[:, 0] * np.int64(n) + e[:, 1])
+
+
+def enclose_holes(V: np.ndarray, F: np.ndarray, holes: Sequence[Hole],
+                  skip: dict[int, str] | None = None, *, edge_length: float | None = None,
+                  check: bool = True, intersections: bool = True,
+                  method: str | Mapping[int, str] = "auto",
+                  creases: Mapping[int, np.ndarray] | None = None,
+                  progress: Callable[[int, int], None] | None = None
+                  ) -> tuple[np.ndarray, np.ndarray, list[HoleReport]]:
+    """Enclose the selected holes of a mesh with initial (membrane) patches.
+
+    Parameters
+    ----------
+    V : (nV, 3) float64
+    F : (nF, 3) int64
+    holes : list of Hole, from :func:`find_holes` on ``(V, F)``
+    skip : dict of int to str, optional
+        Holes not to fill and why (from :func:`select_holes`).
+    edge_length : float, optional
+        Target edge length of every patch (default: each loop's mean edge length).
+    check : bool
+        Refuse (skip, with the reason) a patch that lies on the existing surface (the border of
+        an open surface filled a second time).
+    intersections : bool
+        Also refuse a patch whose membrane position intersects the mesh (with ``check``).
+    method : str or mapping of int to str
+        How each loop is triangulated (:func:`enclose_loop`: ``"auto"`` or ``"liepa"``), for all
+        holes or per hole index (missing indices: ``"auto"``). Islands are always filled as
+        planar annuli.
+    creases : mapping of int to (q, 2) int, optional
+        Per hole index, pairs of loop positions joined by a crease polyline through the patch
+        (constrained edges of the planar triangulation, see :mod:`.creases`).
+    progress : callable, optional
+        Called as ``progress(done, total)`` before each selected hole is enclosed.
+
+    Returns
+    -------
+    V_new : (nV + m, 3) float64
+        ``V`` followed by the new interior vertices (hole by hole).
+    F_new : (nF + t, 3) int64
+        ``F`` followed by the new faces (hole by hole).
+    reports : list of HoleReport, one per hole in ``holes`` order.
+    """
+    V = np.asarray(V, dtype=np.float64)
+    F = np.asarray(F, dtype=np.int64)
+    nV = len(V)
+    skip = dict(skip or {})
+    methods = {h.index: method if isinstance(method, str) else method.get(h.index, "auto")
+               for h in holes}
+    bad = sorted(set(methods.values()) - set(ENCLOSE_METHODS))
+    if bad:
+        raise MeshRepairError(f"method must be one of {ENCLOSE_METHODS}, got {bad[0]!r}")
+    reports: dict[int, HoleReport] = {}
+    by_index = {h.index: h for h in holes}
+    longest_of_component: dict[int, int] = {}
+    for h in holes:  # holes are sorted longest first
+        longest_of_component.setdefault(h.component, h.index)
+
+    # islands: a loop nested inside another hole is filled together with it as an annulus
+    partner: dict[int, int] = {}
+    # candidate pairs from the loops' bounding boxes (the outer box padded by half its size, as
+    # in _nested_in), so many small holes do not cost a quadratic number of geometric tests
+    blo = np.array([V[h.vertices].min(axis=0) for h in holes]).reshape(-1, 3)
+    bhi = np.array([V[h.vertices].max(axis=0) for h in holes]).reshape(-1, 3)
+    bpad = 0.5 * (bhi - blo).max(axis=1, initial=0.0) if len(holes) else np.zeros(0)
+    order_lo = np.argsort(blo[:, 0]) if len(holes) else np.zeros(0, np.int64)
+    for io, ho in enumerate(holes):
+        lo_o, hi_o = blo[io] - bpad[io], bhi[io] + bpad[io]
+        a = np.searchsorted(blo[order_lo, 0], lo_o[0], side="left")
+        cand = order_lo[a:]
+        cand = cand[((blo[cand] >= lo_o) & (bhi[cand] <= hi_o)).all(axis=1)]
+        for ii in np.sort(cand).tolist():
+            hi = holes[ii]
+            if hi.index == ho.index or hi.index in partner or ho.index in partner:
+                continue
+            if hi.length < ho.length and _nested_in(V, F, ho, hi):
+                partner[ho.index] = hi.index
+                partner[hi.index] = ho.index
+    for h in holes:
+        if h.index in partner:
+            o = partner[h.index]
+            if h.length < by_index[o].length:  # h is the island
+                if o in skip:
+                    skip[h.index] = (f"island inside hole {o}, which is not filled (loop bounds a "
+                                     "separate surface piece inside that hole)")
+                else:
+                    skip.pop(h.index, None)
+
+    code_n = np.int64(1) << np.int64(31)
+    edge_set = set(_existing_edge_codes(F, code_n).tolist())
+    vf_ptr, vf_idx = _vertex_faces(F, nV)
+    fbox = _LocalFaces(V, F)  # face bounding boxes of the input, for local checks
+    newV: list[np.ndarray] = []
+    newF: list[np.ndarray] = []
+    n_added = 0
+    todo = [h for h in holes if h.index not in skip]
+    n_todo, n_done = len(todo), 0
+    for h in holes:
+        if h.index in reports:  # an island already reported with its outer loop
+            continue
+        rep = HoleReport(index=h.index, n_boundary=h.n_boundary, length=h.length,
+                         status="skipped", loop=h.vertices.copy())
+        reports[h.index] = rep
+        if h.index in skip:
+            rep.reason = skip[h.index]
+            continue
+        n_done += 1
+        if progress is not None:
+            progress(n_done, n_todo)
+        log.debug("hole %d (%d/%d): %d boundary edges", h.index, n_done, n_todo, h.n_boundary)
+        if h.index in partner and h.length < by_index[partner[h.index]].length:
+            rep.reason = (f"island inside hole {partner[h.index]}, which could not be filled "
+                          "(see there)")
+            continue  # island: handled with its outer loop
+        zero = _coincident_loop_vertices(V, h.vertices)
+        if zero is not None:
+            rep.reason = (f"zero-width hole: loop vertices {zero[0]} and {zero[1]} are at the "
+                          "same position (a seam of duplicated vertices); merge duplicate "
+                          "vertices (e.g. trimesh merge_vertices) instead of filling it")
+            continue
+        h_len = edge_length
+        try:
+            if h.index in partner:
+                isl = by_index[partner[h.index]]
+                gverts = np.r_[h.vertices, isl.vertices]
+                if h_len is None:
+                    h_len = (h.length + isl.length) / (h.n_boundary + isl.n_boundary)
+                patch = _enclose_annulus(V[h.vertices], V[isl.vertices], h_len)
+                if patch is None:
+                    rep.reason = (f"hole {isl.index} is an island inside this hole and the "
+                                  "region between them could not be triangulated in a planar "
+                                  "view; fill it manually or exclude both")
+                    reports[isl.index] = HoleReport(
+                        index=isl.index, n_boundary=isl.n_boundary, length=isl.length,
+                        status="skipped", reason=f"island inside hole {h.index} (see there)",
+                        loop=isl.vertices.copy())
+                    continue
+            elif methods[h.index] == "liepa":
+                gverts = h.vertices
+                Fcur = np.concatenate([F, *newF]) if newF else F
+                patch = enclose_loop(V[h.vertices], edge_length=h_len, method="liepa",
+                                     opposite=_opposite_points(V, F, h.vertices),
+                                     forbidden=_loop_chords(Fcur, h.vertices))
+            else:
+                gverts = h.vertices
+                cr = None if creases is None else creases.get(h.index)
+                patch = enclose_loop(V[h.vertices], edge_length=h_len,
+                                     **({} if cr is None else {"creases": cr}))
+        except MeshRepairError as exc:
+            rep.reason = f"cannot triangulate: {exc}"
+            continue
+        if not np.isfinite(patch.X).all():
+            rep.reason = "degenerate loop: its patch has non-finite positions"
+            continue
+        k = patch.n_loop
+        # chords (patch edges between two loop vertices) must not duplicate an existing edge
+        for _ in range(4):
+            he = np.sort(np.concatenate([patch.T[:, [0, 1]], patch.T[:, [1, 2]],
+                                         patch.T[:, [2, 0]]]), axis=1)
+            he, n_faces = np.unique(he, axis=0, return_counts=True)
+            chords = he[(he[:, 1] < k) & (n_faces == 2)]  # loop edges have one patch face
+            g = np.sort(gverts[chords], axis=1)
+            dup = {tuple(c) for c, gc in zip(chords.tolist(), g.tolist(), strict=True)
+                   if gc[0] * code_n + gc[1] in edge_set}
+            if not dup:
+                break
+            patch = _split_chords(patch, dup)
+        if k == 3 and h.index not in partner:
+            inc = F[vf_idx[vf_ptr[gverts[0]]:vf_ptr[gverts[0] + 1]]]
+            if (np.sort(inc, axis=1) == np.sort(gverts)).all(axis=1).any():
+                rep.reason = ("the loop bounds a single isolated triangle; filling it would "
+                              "create a two-sided sliver")
+                continue
+        m = len(patch.X) - k
+        gmap = np.r_[gverts, nV + n_added + np.arange(m)]
+        Fp = gmap[patch.T]
+        Vp = patch.X[k:]
+        if check and m > 0:
+            hh = h_len if h_len is not None else h.length / h.n_boundary
+            Vl, Fl, Fpl, il = fbox.local(Vp, Fp, newV, newF, nV, pad=2.0 * hh)
+            reason = _patch_problem(Vl, Fl, Fpl, il, hh, intersections,
+                                    border=h.index == longest_of_component[h.component])
+            if reason:
+                rep.reason = reason
+                continue
+        newV.append(Vp)
+        newF.append(Fp)
+        n_added += m
+        e = np.sort(np.concatenate([Fp[:, [0, 1]], Fp[:, [1, 2]], Fp[:, [2, 0]]]), axis=1)
+        edge_set.update((e[:, 0] * code_n + e[:, 1]).tolist())
+        rep.status = "filled"
+        rep.reason = patch.method
+        rep.n_new_vertices = m
+        rep.n_new_faces = len(Fp)
+        if len(patch.sharp_edges):
+            rep.sharp_edges = gmap[patch.sharp_edges]
+            rep.n_creases = patch.n_creases
+            rep.reason += f", {patch.n_creases} crease{'s' if patch.n_creases > 1 else ''}"
+        if h.index in partner:
+            isl = by_index[partner[h.index]]
+            rep.reason = f"annulus with island hole {isl.index}"
+            reports[isl.index] = HoleReport(
+                index=isl.index, n_boundary=isl.n_boundary, length=isl.length, status="filled",
+                reason=f"island: filled together with hole {h.index}", loop=isl.vertices.copy())
+    Vout = np.concatenate([V, *newV]) if newV else V
+    Fout = np.concatenate([F, *newF]) if newF else F
+    return Vout, Fout, [reports[h.index] for h in holes]
+
+
+def _vertex_faces(F: np.ndarray, nV: int) -> tuple[np.ndarray, np.ndarray]:
+    """Vertex -> incident faces in CSR form: faces of ``v`` are ``idx[ptr[v]:ptr[v + 1]]``."""
+    flat = F.ravel()
+    order = np.argsort(flat, kind="stable")
+    ptr = np.r_[0, np.cumsum(np.bincount(flat, minlength=nV))]
+    return ptr, order // 3
+
+
+def _coincident_loop_vertices(V: np.ndarray, loop: np.ndarray) -> tuple[int, int] | None:
+    """Two distinct loop vertices at the same position (a zero-width hole along a seam of
+    duplicated vertices), or None. O(k log k)."""
+    from scipy.spatial import cKDTree
+
+    P = V[loop]
+    scale = float(np.ptp(P, axis=0).max()) if len(P) else 0.0
+    if not scale > 0:
+        return (int(loop[0]), int(loop[1]))
+    pairs = cKDTree(P).query_pairs(1e-9 * scale, output_type="ndarray")
+    if len(pairs) == 0:
+        return None
+    i, j = pairs[0]
+    return int(loop[i]), int(loop[j])
+
+
+class _LocalFaces:
+    """Faces of a mesh near a box, from precomputed face bounding boxes (so checking one patch
+    costs O(nF) vectorised comparisons, not a k-d tree over the whole mesh)."""
+
+    def __init__(self, V: np.ndarray, F: np.ndarray):
+        self.V, self.F = V, F
+        T = V[F]
+        self.lo, self.hi = T.min(axis=1), T.max(axis=1)
+
+    def local(self, Vp, Fp, newV, newF, nV, pad):
+        """Local mesh of the faces overlapping the patch box: ``(Vl, Fl, Fpl, interior)`` with
+        the existing faces ``Fl``, the patch faces ``Fpl`` and the patch's interior vertices."""
+        Vall_new = np.concatenate([*newV, Vp]) if newV else Vp
+        Fall_prev = np.concatenate(newF) if newF else np.empty((0, 3), np.int64)
+
+        def pos(idx):
+            out = np.empty((len(idx), 3))
+            old = idx < nV
+            out[old] = self.V[idx[old]]
+            out[~old] = Vall_new[idx[~old] - nV]
+            return out
+
+        Pp = pos(Fp.ravel())
+        lo, hi = Pp.min(axis=0) - pad, Pp.max(axis=0) + pad
+        sel = np.flatnonzero(((self.lo <= hi) & (self.hi >= lo)).all(axis=1))
+        parts = [self.F[sel]]
+        if len(Fall_prev):
+            T = pos(Fall_prev.ravel()).reshape(-1, 3, 3)
+            ok = ((T.min(axis=1) <= hi) & (T.max(axis=1) >= lo)).all(axis=1)
+            parts.append(Fall_prev[ok])
+        Fl_g = np.concatenate(parts)
+        used = np.unique(np.r_[Fl_g.ravel(), Fp.ravel()])
+        loc = {int(g): i for i, g in enumerate(used.tolist())}
+        remap = np.vectorize(loc.__getitem__, otypes=[np.int64])
+        Vl = pos(used)
+        Fl = remap(Fl_g) if len(Fl_g) else np.empty((0, 3), np.int64)
+        Fpl = remap(Fp)
+        interior = np.flatnonzero(used >= nV + (len(Vall_new) - len(Vp)))
+        return Vl, Fl.reshape(-1, 3), Fpl, interior
+
+
+def _patch_problem(V: np.ndarray, F: np.ndarray, Fp: np.ndarray, interior: np.ndarray,
+                   h: float, intersections: bool, border: bool = True) -> str:
+    """Reason to refuse a patch (empty string if fine). ``border``: the loop is the longest of
+    its component (only such a loop is said to be a border)."""
+    from ..metrics import point_to_surface
+
+    # a few interior vertices near the surface say nothing (a crease corner of a small hole
+    # lies close to the surround): the test is for big patches doubling a sheet
+    if len(F) and len(interior) >= 8:
+        d = point_to_surface(V[interior], V, F)
+        if np.mean(d < 0.2 * h) > 0.5:
+            if border:
+                return ("the patch would lie on the existing surface (the loop is probably the "
+                        "outer border of an open surface: use keep_border or exclude it)")
+            return ("the patch would lie on the existing surface (another sheet of the mesh "
+                    "covers the hole); exclude it or fill it manually")
+    if not intersections:
+        return ""
+    Fall = np.r_[F, Fp]
+    pairs = self_intersections(V, Fall, np.arange(len(F), len(Fall)))
+    if len(pairs):
+        return (f"the patch would intersect the surface ({len(pairs)} face pairs): the loop is "
+                "too twisted for a direct fill; exclude it or fill it manually")
+    return ""

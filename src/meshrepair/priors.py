@@ -1,0 +1,61 @@
+"""A third edge class for the regulariser of (6): flat-region total variation inside CAD regions.
+
+The paper's regulariser has two classes of edges: sharp (``M_E``, MC penalty with non-convexity
+``a``, ℓ0-like) and the rest (edge-Willmore ``w ||t||²``). On a CAD part the non-sharp edges are
+mostly *flat* regions, where the quadratic Willmore term only damps the residual noise of the
+normals (it keeps a ripple of a few degrees: median face-normal error 1.9° on tgv_fandisk against
+1.2° for MeshTGV), while a total-variation-like penalty makes them exactly constant. Inside the
+crease-supported region (:mod:`meshrepair.regions`) the non-sharp edges therefore keep an MC
+penalty with a small non-convexity ``a_f`` (ℓ1-like, the robust stage's prior) during the feature
+stage:
+
+.. math::
+    R(t) = \\sum_{e \\in M_E} φ(\\|t_e\\|; a) + \\sum_{e \\in T \\setminus M_E} φ(\\|t_e\\|; a_f)
+           + \\sum_{e \\notin T \\cup M_E} w \\|t_e\\|^2 ,
+
+``T`` the crease-supported edges. The t-subproblem (22) still separates over edges; on ``T`` it is
+the firm-thresholding prox of (23) with ``a_f`` in place of ``a`` (strongly convex since
+``β1 > a ≥ a_f``, rule (24)). Outside ``T`` (smooth, organic regions) nothing changes.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .penalties import mc_penalty, prox_mc, t_update
+
+
+def t_update_mixed(DN: np.ndarray, rho1: np.ndarray, sharp: np.ndarray, flat: np.ndarray, *,
+                   a: float, a_flat: float, beta1: float, willmore_weight: float = 1.0
+                   ) -> np.ndarray:
+    """Exact minimiser of (22) with the three edge classes of the module docstring.
+
+    Parameters
+    ----------
+    DN, rho1 : (nE, 3)
+    sharp : (nE,) bool, ``M_E`` (MC with ``a``)
+    flat : (nE,) bool, the flat-TV class ``T`` (MC with ``a_flat`` where not sharp)
+    a, a_flat : non-convexities, ``beta1 > max(a, a_flat)``
+    beta1 : penalty parameter
+    willmore_weight : ``w`` on the remaining edges
+
+    Returns
+    -------
+    (nE, 3)
+    """
+    t = t_update(DN, rho1, sharp, a=a, beta1=beta1, willmore_weight=willmore_weight)
+    f = np.flatnonzero(np.asarray(flat, bool) & ~np.asarray(sharp, bool))
+    if len(f):
+        base = beta1 * DN[f] + rho1[f]
+        t[f] = prox_mc(base / beta1, a_flat, beta1)
+    return t
+
+
+def reg_energy_mixed(t: np.ndarray, sharp: np.ndarray, flat: np.ndarray, *, a: float,
+                     a_flat: float, willmore_weight: float = 1.0) -> float:
+    """``R(t)`` of the module docstring for per-edge vectors ``t (nE, 3)``."""
+    nt = np.sqrt(np.einsum("ij,ij->i", t, t))
+    f = np.asarray(flat, bool) & ~np.asarray(sharp, bool)
+    val = np.where(sharp, mc_penalty(nt, a), willmore_weight * nt * nt)
+    val[f] = mc_penalty(nt[f], a_flat)
+    return float(val.sum())
