@@ -27,6 +27,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
+from . import _fused
 from . import _kernels as _k
 from ._memory import heap_allocations
 from .fidelity import prox_group_l1, tangential_anchor
@@ -347,6 +348,7 @@ class ADMMSolver:
                 last = si == len(o.stages) - 1
                 src = N if o.mask_source == "N" else _k.face_normals(V, F)
                 sharp = self._mask(stage.mask, src, given_mask)
+                sh = sharp[self.ie]  # the mask on interior edges, re-gathered when it changes
                 beta1 = stage.beta1 if (sharp.any() or stage.mask == "all") else max(
                     stage.beta1, stage.eps * 2.0 * o.willmore_weight)
                 if sharp.any() and beta1 <= stage.a:
@@ -359,7 +361,7 @@ class ADMMSolver:
                             and j % o.mask_update_every == 0):
                         src = N if o.mask_source == "N" else _k.face_normals(V, F)
                         sharp = self._mask("adaptive", src, given_mask)
-                    sh = sharp[self.ie]
+                        sh = sharp[self.ie]
                     # (17) t-update
                     DN = _k.grad_edges(N, l, fa, fb)
                     mixed = stage.flat_a > 0 and self._flat_int is not None
@@ -393,13 +395,12 @@ class ADMMSolver:
                         Vn = self.relaxer.step(Vn, sharp, stage.relax)
                     # (20)-(21) multipliers (D with the lengths of V^(k), as in the N-update)
                     res_t = _k.update_rho1(t, N, l, fa, fb, rho1, beta1)
-                    Nv = _k.face_normals(Vn, F)
-                    res_n = _k.update_rho2(N, Nv, rho2, beta2)
-                    rel = np.sqrt(_k.sqdist(Vn, V) / max(_k.sqdist(V, np.zeros_like(V)), 1e-300))
+                    Nv, res_n = _fused.normals_update_rho2(Vn, F, N, rho2, beta2)
+                    rel = _fused.rel_change(Vn, V)
                     V = Vn
-                    l = _k.edge_lengths(V, E_int)
                     k += 1
-                    reg = _k.reg_energy(Nv, l, fa, fb, sh, stage.a, o.willmore_weight)
+                    l, reg = _fused.lengths_reg_energy(V, E_int, Nv, fa, fb, sh, stage.a,
+                                                       o.willmore_weight)
                     if mixed:  # flat-TV edges: replace their Willmore value by the MC value
                         f = np.flatnonzero(fl & ~sh)
                         tf = l[f, None] * (Nv[fa[f]] - Nv[fb[f]])
