@@ -70,20 +70,15 @@ def _check_output(out: str, inputs: list[str | None], force: bool) -> Path:
     return output_path(out, inputs, force=force)
 
 
-def run_complete(args: argparse.Namespace) -> int:
-    """Handler of ``meshrepair complete``; returns the exit code."""
-    from ..complete import complete, extract_patch
-    from ..io import read_mesh, write_mesh
+def complete_arguments(mesh, tmesh, options: dict) -> tuple[tuple, dict]:
+    """``(template, kw)`` for :func:`meshrepair.complete` from the read meshes and
+    :func:`complete_options`' values (selection files are read here)."""
+    from ..complete import extract_patch
 
-    out = _check_output(args.output, [args.input, args.template, args.region, args.transform,
-                                      args.template_region, args.log], args.force)
-    if args.log is not None and Path(args.log).suffix.lower() != ".json":
-        raise MeshRepairError(f"--log {args.log!r} must be a .json file")
-    t0 = time.perf_counter()
-    mesh = read_mesh(args.input)
-    tmesh = read_mesh(args.template)
-    if args.template_region is not None:
-        sel = _selection(args.template_region, tmesh.V, tmesh.F)
+    kw = dict(options)
+    region, hole, template_region = kw.pop("region"), kw.pop("hole"), kw.pop("template_region")
+    if template_region is not None:
+        sel = _selection(template_region, tmesh.V, tmesh.F)
         if "region" in sel:
             template = extract_patch(tmesh.V, tmesh.F, sel["region"])
         else:
@@ -93,26 +88,44 @@ def run_complete(args: argparse.Namespace) -> int:
             template = extract_patch(tmesh.V, tmesh.F, faces)
     else:
         template = (tmesh.V, tmesh.F)
-    kw: dict = {}
-    if args.region is not None:
-        kw.update(_selection(args.region, mesh.V, mesh.F))
+    if region is not None:
+        kw.update(_selection(region, mesh.V, mesh.F))
+    elif hole is not None:
+        kw["hole"] = hole
     else:
-        kw["hole"] = args.hole
+        raise MeshRepairError("complete needs --region FILE or --hole K")
+    return template, kw
+
+
+def output_attributes(res, out: str | Path) -> dict | None:
+    """Per-vertex m_v, strip and template attributes written with a PLY output (else None)."""
+    if Path(out).suffix.lower() != ".ply":
+        return None
+    nV = len(res.V)
+    strip = np.zeros(nV, np.uint8)
+    strip[res.strip_vertices] = 1
+    tmpl = np.zeros(nV, np.uint8)
+    tmpl[res.template_vertices] = 1
+    return {"m_v": res.M_V.astype(np.float32), "strip": strip, "template": tmpl}
+
+
+def run_complete(args: argparse.Namespace) -> int:
+    """Handler of ``meshrepair complete``; returns the exit code."""
+    from ..complete import complete
+    from ..io import read_mesh, write_mesh
+
+    out = _check_output(args.output, [args.input, args.template, args.region, args.transform,
+                                      args.template_region, args.log], args.force)
+    if args.log is not None and Path(args.log).suffix.lower() != ".json":
+        raise MeshRepairError(f"--log {args.log!r} must be a .json file")
+    t0 = time.perf_counter()
+    mesh = read_mesh(args.input)
+    tmesh = read_mesh(args.template)
+    template, kw = complete_arguments(mesh, tmesh, complete_options(args))
     t_read = time.perf_counter() - t0
-    res = complete(mesh.V, mesh.F, template=template, transform=args.transform,
-                   strip_rings=args.strip_rings, mode=args.mode, allow_scale=args.allow_scale,
-                   orientation=args.orientation, icp=args.icp, iterations=args.iterations,
-                   th=args.th, denoise=args.denoise, **kw)
+    res = complete(mesh.V, mesh.F, template=template, **kw)
     t_solve = time.perf_counter() - t0 - t_read
-    attrs = None
-    if out.suffix.lower() == ".ply":
-        nV = len(res.V)
-        strip = np.zeros(nV, np.uint8)
-        strip[res.strip_vertices] = 1
-        tmpl = np.zeros(nV, np.uint8)
-        tmpl[res.template_vertices] = 1
-        attrs = {"m_v": res.M_V.astype(np.float32), "strip": strip, "template": tmpl}
-    write_mesh(out, res.V, res.F, vertex_attributes=attrs, overwrite=True)
+    write_mesh(out, res.V, res.F, vertex_attributes=output_attributes(res, out), overwrite=True)
     c = res.correspondence
     if args.log is not None:
         corr = {k: (v.tolist() if isinstance(v, np.ndarray) else v) for k, v in c.items()}
@@ -144,21 +157,11 @@ def run_complete(args: argparse.Namespace) -> int:
     return 0
 
 
-def register(subparsers) -> None:
-    """Add the ``complete`` sub-command to an argparse ``subparsers`` object."""
+def add_complete_options(p, *, required: bool = True) -> None:
+    """The completion options of ``meshrepair complete`` (shared with ``meshrepair batch``)."""
     from ..complete import ICP_MODES, MODES, ORIENTATIONS
 
-    p = subparsers.add_parser(
-        "complete",
-        help="replace a region (or fill a hole) with a template patch and blend the seam",
-        description="Context-aware completion: remove the region of IN given by --region (or "
-        "use the existing hole --hole K), align TEMPLATE (a mesh with exactly one boundary "
-        "loop) to it, stitch it in and blend the seam strip with the variational model.",
-    )
-    p.add_argument("input", help="mesh to complete (PLY, OBJ, OFF, STL)")
-    p.add_argument("template", help="template patch: a mesh file with one boundary loop")
-    p.add_argument("output", help="mesh file to write (PLY also stores m_v, strip, template)")
-    g = p.add_mutually_exclusive_group(required=True)
+    g = p.add_mutually_exclusive_group(required=required)
     g.add_argument("--region", metavar="FILE",
                    help="faces to replace: a text file of face indices, or a .ply/.npy "
                    "per-vertex mask (the faces with all three vertices selected)")
@@ -186,6 +189,30 @@ def register(subparsers) -> None:
                    help="dihedral threshold of the adaptive M_E (default 30)")
     p.add_argument("--denoise", action="store_true",
                    help="solve on the whole mesh with the denoising schedule")
+
+
+def complete_options(args: argparse.Namespace) -> dict:
+    """``region``, ``hole``, ``template_region`` and the keyword arguments of
+    :func:`meshrepair.complete` from the parsed options (see :func:`complete_arguments`)."""
+    return dict(region=args.region, hole=args.hole, template_region=args.template_region,
+                transform=args.transform, strip_rings=args.strip_rings, mode=args.mode,
+                allow_scale=args.allow_scale, orientation=args.orientation, icp=args.icp,
+                iterations=args.iterations, th=args.th, denoise=args.denoise)
+
+
+def register(subparsers) -> None:
+    """Add the ``complete`` sub-command to an argparse ``subparsers`` object."""
+    p = subparsers.add_parser(
+        "complete",
+        help="replace a region (or fill a hole) with a template patch and blend the seam",
+        description="Context-aware completion: remove the region of IN given by --region (or "
+        "use the existing hole --hole K), align TEMPLATE (a mesh with exactly one boundary "
+        "loop) to it, stitch it in and blend the seam strip with the variational model.",
+    )
+    p.add_argument("input", help="mesh to complete (PLY, OBJ, OFF, STL)")
+    p.add_argument("template", help="template patch: a mesh file with one boundary loop")
+    p.add_argument("output", help="mesh file to write (PLY also stores m_v, strip, template)")
+    add_complete_options(p)
     p.add_argument("--log", metavar="RUN.json", default=None,
                    help="write history, parameters, timings and correspondence as JSON "
                    "(readable by 'meshrepair report --log')")
