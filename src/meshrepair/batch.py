@@ -14,10 +14,12 @@ process that dies (killed, out of memory past ``--memory-limit``) is restarted b
 the scheduler re-runs its task elsewhere, up to ``distributed.scheduler.allowed-failures`` times
 (``retries`` for the local cluster), after which the mesh is recorded as failed
 (``error_type="KilledWorker"``). Numeric code on a worker is single-threaded (one mesh per
-process, no oversubscription): the local cluster sets the thread variables of
-:data:`meshrepair.jobs.THREAD_ENV` before spawning worker processes, and on an external cluster
-the :class:`distributed.diagnostics.plugin.Environ` nanny plugin sets them (restarting workers
-that lack them) before meshrepair is imported there.
+process, no oversubscription): the local cluster gives its worker processes the thread
+variables of :data:`meshrepair.jobs.THREAD_ENV` (``LocalCluster(env=...)``, applied before the
+worker imports meshrepair and numba; OpenBLAS/OpenMP/MKL are also in Dask's default
+``pre-spawn-environ``, set before numpy loads), and on an external cluster the
+:class:`distributed.diagnostics.plugin.Environ` nanny plugin sets them (restarting workers that
+lack them). Each job also runs under ``threadpool_limits(1)``.
 """
 
 from __future__ import annotations
@@ -88,13 +90,16 @@ def connect(scheduler: str | None = None, *, workers: int | None = None,
     if not isinstance(retries, int) or retries < 0:
         raise MeshRepairError(f"retries must be a non-negative integer, got {retries!r}")
     n = workers or os.cpu_count() or 1
-    env = {**dask.config.get("distributed.nanny.pre-spawn-environ", {}), **THREAD_ENV}
-    with dask.config.set({"distributed.nanny.pre-spawn-environ": env,
-                          "distributed.scheduler.allowed-failures": retries}):
+    # env: set in each worker process before it imports meshrepair (numba reads its thread
+    # count then); the BLAS/OpenMP variables are also in Dask's default pre-spawn-environ (set
+    # before numpy loads). Not pre-spawn-environ here: that also changes this process's
+    # environment, and numba refuses a changed NUMBA_NUM_THREADS once its threads exist.
+    with dask.config.set({"distributed.scheduler.allowed-failures": retries}):
         try:
             cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True,
                                    memory_limit=memory_limit or "auto", host="127.0.0.1",
-                                   dashboard_address="127.0.0.1:0", silence_logs=logging.ERROR)
+                                   dashboard_address="127.0.0.1:0", silence_logs=logging.ERROR,
+                                   env=dict(THREAD_ENV))
         except (ValueError, TypeError) as exc:
             raise MeshRepairError(f"cannot start a local Dask cluster ({n} workers, memory "
                                   f"limit {memory_limit!r}): {exc}") from None
@@ -132,9 +137,10 @@ def _job(task: str, input: str, output: str, options: dict, thumbnails: str | No
     rec = run_job(task, input, output, options, thumbnails=thumbnails,
                   thumbnail_size=thumbnail_size)
     try:
-        rec["worker"] = get_worker().address
+        w = get_worker()
+        rec["worker"], rec["key"] = w.address, str(w.get_current_task())
     except ValueError:  # pragma: no cover - always on a worker here
-        rec["worker"] = None
+        rec["worker"] = rec["key"] = None
     return rec
 
 
