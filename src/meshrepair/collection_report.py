@@ -63,6 +63,8 @@ def _row(rec: dict, out: Path) -> str:
             sizes += f" &rarr; {rec['out_vertices']} V, {rec['out_faces']} F"
     metrics = "".join(f"<div>{_esc(k)}: {_esc(_fmt(v))}</div>"
                       for k, v in (rec.get("metrics") or {}).items())
+    metrics += "".join(f'<div class="warn">warning: {_esc(w)}</div>'
+                       for w in rec.get("warnings") or [])
     if not ok:
         metrics = f'<div class="err">{_esc(rec.get("error") or "unknown error")}</div>' + metrics
     secs = rec.get("seconds")
@@ -77,6 +79,7 @@ def _row(rec: dict, out: Path) -> str:
 _CSS = """body{font-family:sans-serif;margin:1.5em;color:#222}
 table{border-collapse:collapse}td,th{border:1px solid #ccc;padding:4px 8px;vertical-align:top;
 font-size:13px}th{background:#eee}tr.bad{background:#fff0f0}.err{color:#a00;max-width:40em}
+.warn{color:#850;max-width:40em}
 td.thumb{padding:0}code{background:#f4f4f4;padding:0 3px}"""
 
 

@@ -219,6 +219,19 @@ def thread_counts() -> dict:
     return out
 
 
+class _WarningsCollector(logging.Handler):
+    """Keeps the library's warnings during a job (e.g. pinched vertices) for its record."""
+
+    def __init__(self, limit: int = 20):
+        super().__init__(logging.WARNING)
+        self.messages: list[str] = []
+        self.limit = limit
+
+    def emit(self, record: logging.LogRecord) -> None:
+        if len(self.messages) < self.limit:
+            self.messages.append(record.getMessage())
+
+
 def _atomic_png(path: Path, image: np.ndarray) -> None:
     from matplotlib.image import imsave
 
@@ -241,7 +254,7 @@ def _thumbnails(base: str, before, after, size: int) -> dict:
         if mesh is None:
             continue
         img = render_mesh(mesh[0], mesh[1], width=size, height=size, colorbar=False,
-                          fit_bounds=bounds)
+                          fit_bounds=bounds, azimuth=35.0, elevation=25.0)
         p = Path(f"{base}.{name}.png")
         _atomic_png(p, img)
         out[name] = str(p)
@@ -268,9 +281,11 @@ def run_job(task: str, input: str, output: str, options: dict, *,
     Returns
     -------
     dict
-        ``status`` ("done" or "failed"), ``error``, ``error_type``, ``seconds``,
+        ``status`` ("done" or "failed"), ``error``, ``error_type``, ``seconds`` (wall),
+        ``cpu_seconds`` (CPU time of the process: below ``seconds`` when the machine is busy),
         ``peak_rss_mb`` (resident high-water mark of the process during the job), ``vertices``,
-        ``faces``, ``out_vertices``, ``out_faces``, ``metrics`` (the task's), ``threads``,
+        ``faces``, ``out_vertices``, ``out_faces``, ``metrics`` (the task's), ``warnings`` (the
+        library's warnings during the job), ``threads``,
         ``pid``, ``host``, ``thumbnails`` and the input's ``input_size`` and ``input_mtime_ns``.
     """
     from threadpoolctl import threadpool_limits
@@ -278,7 +293,7 @@ def run_job(task: str, input: str, output: str, options: dict, *,
     from .commands.common import output_path
     from .io import read_mesh
 
-    t0 = time.perf_counter()
+    t0, c0 = time.perf_counter(), time.process_time()
     hwm = _reset_peak_rss()
     rec: dict = {"task": task, "input": str(input), "output": str(output), "status": "failed",
                  "error": None, "error_type": None, "vertices": None, "faces": None,
@@ -292,6 +307,8 @@ def run_job(task: str, input: str, output: str, options: dict, *,
     except OSError:
         pass
     before = after = None
+    warnings = _WarningsCollector()
+    logging.getLogger("meshrepair").addHandler(warnings)
     try:
         if task not in _RUN:
             raise MeshRepairError(f"unknown task {task!r}: choose one of {', '.join(TASKS)}")
@@ -314,7 +331,11 @@ def run_job(task: str, input: str, output: str, options: dict, *,
         rec.update(error=f"{type(exc).__name__}: {exc} ({Path(where.filename).name}:"
                          f"{where.lineno})", error_type=type(exc).__name__)
         log.debug("job %s failed", input, exc_info=True)
+    finally:
+        logging.getLogger("meshrepair").removeHandler(warnings)
+    rec["warnings"] = warnings.messages
     rec["seconds"] = round(time.perf_counter() - t0, 4)
+    rec["cpu_seconds"] = round(time.process_time() - c0, 4)
     rec["peak_rss_mb"] = _peak_rss_mb()
     rec["peak_rss_scope"] = "job" if hwm else "process"
     if thumbnails and before is not None:
