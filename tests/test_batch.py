@@ -6,7 +6,6 @@ ones are recorded with their message, resume skips what is done, a killed worker
 import json
 import os
 import signal
-import socket
 import subprocess
 import sys
 import time
@@ -321,12 +320,6 @@ def test_collect_inputs_folder_glob_list(tmp_path):
     assert not (tmp_path / "o").exists()
 
 
-def _free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
-
-
 def test_scheduler_option_with_separate_dask_processes(collection, tmp_path):
     root, refs = collection
     sched_file = tmp_path / "scheduler.json"
@@ -336,10 +329,9 @@ def test_scheduler_option_with_separate_dask_processes(collection, tmp_path):
     procs = []
     try:
         procs.append(subprocess.Popen(
-            [py, "-m", "distributed.cli.dask_scheduler", "--host", "127.0.0.1", "--port",
-             str(_free_port()), "--dashboard-address", f"127.0.0.1:{_free_port()}",
-             "--scheduler-file", str(sched_file)], env=env, stdout=subprocess.DEVNULL,
-            stderr=subprocess.DEVNULL))
+            [py, "-m", "distributed.cli.dask_scheduler", "--host", "127.0.0.1", "--port", "0",
+             "--dashboard-address", "127.0.0.1:0", "--scheduler-file", str(sched_file)],
+            env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL))
         deadline = time.time() + 90
         while not sched_file.exists() and time.time() < deadline:
             time.sleep(0.2)
@@ -373,3 +365,30 @@ def test_scheduler_option_with_separate_dask_processes(collection, tmp_path):
             except subprocess.TimeoutExpired:
                 p.kill()
                 p.wait()
+
+
+def test_records_survive_an_interrupted_write_and_resume_rules(tmp_path):
+    from meshrepair.collection import RecordWriter, is_done, read_records
+
+    w = RecordWriter(tmp_path)
+    w.write({"rel": "a.ply", "status": "failed"})
+    w.write({"rel": "a.ply", "status": "done", "task": "denoise", "options": {"th": 30.0},
+             "version": "0.1.0"})
+    w.close()
+    with open(tmp_path / "batch.jsonl", "a") as fh:
+        fh.write('{"rel": "b.ply", "status": "do')  # the client died mid-line
+    recs = read_records(tmp_path)
+    assert list(recs) == ["a.ply"] and recs["a.ply"]["status"] == "done"  # latest line wins
+    inp, out = tmp_path / "in.ply", tmp_path / "out.ply"
+    inp.write_bytes(b"mesh")
+    st = inp.stat()
+    rec = {**recs["a.ply"], "input_size": st.st_size, "input_mtime_ns": st.st_mtime_ns}
+    same = dict(task="denoise", options={"th": 30.0}, version="0.1.0", input=inp, output=out)
+    assert not is_done(rec, **same)  # no output file
+    out.write_bytes(b"result")
+    assert is_done(rec, **same)
+    assert not is_done(rec, **{**same, "options": {"th": 40.0}})
+    assert not is_done(rec, **{**same, "task": "fill"})
+    assert not is_done(rec, **{**same, "version": "0.2.0"})
+    inp.write_bytes(b"changed mesh")
+    assert not is_done(rec, **same)
