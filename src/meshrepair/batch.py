@@ -134,6 +134,11 @@ def _job(task: str, input: str, output: str, options: dict, thumbnails: str | No
     """The Dask task: one mesh (see :func:`meshrepair.jobs.run_job`), plus the worker."""
     from distributed import get_worker
 
+    lib = logging.getLogger("meshrepair")
+    if not lib.handlers and not logging.getLogger().handlers:
+        # the job keeps the library's warnings in its record (and index.html); without this,
+        # Python's last-resort handler would also print them over the client's progress bar
+        lib.addHandler(logging.NullHandler())
     rec = run_job(task, input, output, options, thumbnails=thumbnails,
                   thumbnail_size=thumbnail_size)
     try:

@@ -128,8 +128,9 @@ def run_batch(args: argparse.Namespace) -> int:
                                 disable=args.quiet)
             return
         bar = state["bar"]
+        bar.set_postfix(done=ev["done"], failed=ev["failed"], running=ev["running"],
+                        refresh=False)
         bar.update(1)
-        bar.set_postfix(done=ev["done"], failed=ev["failed"], running=ev["running"])
 
     if not getattr(args, "verbose", 0):  # Dask logs its cluster's life at INFO level
         import distributed  # noqa: F401 - configures its loggers on import; then quieten them
