@@ -132,7 +132,7 @@ def test_denoise_folder_then_resume(client, collection, tmp_path):
     assert sorted(new) == sorted(BAD)
     assert "(3 resumed)" in (out / "index.html").read_text()
     # other options (or another task) do not match the records: refused without --force
-    with pytest.raises(MeshRepairError, match="exist already"):
+    with pytest.raises(MeshRepairError, match="exist without a record.*add --force"):
         batch.run(root, out, task="denoise", client=client, resume=True, th=40.0)
     # a changed input is not skipped either
     os.utime(root / "a.ply", ns=(time.time_ns(), time.time_ns()))

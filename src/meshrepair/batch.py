@@ -237,6 +237,12 @@ def run(paths, out_dir: str | os.PathLike, *, task: str, client=None, scheduler:
         if o.exists() and not force:
             existing.append(o)
         todo.append((p, rel, o))
+    if existing and resume:
+        raise MeshRepairError(
+            f"{len(existing)} outputs exist without a record of the same task, options, version "
+            f"and input (e.g. {str(existing[0])!r}: other options, a changed input, or written "
+            "by an interrupted run just before its record); add --force (force=True) to redo "
+            "them, the meshes recorded as done are still skipped")
     if existing:
         raise MeshRepairError(
             f"{len(existing)} outputs exist already (e.g. {str(existing[0])!r}); pass --resume "
