@@ -29,7 +29,7 @@ import logging
 import os
 import secrets
 from collections.abc import Callable, Iterator
-from contextlib import contextmanager
+from contextlib import contextmanager, nullcontext
 from pathlib import Path
 
 from . import __version__
@@ -167,8 +167,8 @@ def _lost(task: str, inp: Path, out: Path, exc: BaseException) -> dict:
 
 
 def run(paths, out_dir: str | os.PathLike, *, task: str, client=None, scheduler: str | None = None,
-        workers: int | None = None,
-        memory_limit: str | None = None, resume: bool = False, force: bool = False,
+        workers: int | None = None, memory_limit: str | None = None, resume: bool = False,
+        force: bool = False,
         pattern: str | None = None, retries: int = 2, thumbnails: bool = True,
         thumbnail_size: int = 160, report: bool = True,
         callback: Callable[[dict], None] | None = None, **options) -> list[dict]:
@@ -251,8 +251,8 @@ def run(paths, out_dir: str | os.PathLike, *, task: str, client=None, scheduler:
     out.mkdir(parents=True, exist_ok=True)
     if todo:
         _run_jobs(todo, out, task, options, results, client=client, scheduler=scheduler,
-                  workers=workers,
-                  memory_limit=memory_limit, retries=retries, thumbnails=thumbnails,
+                  workers=workers, memory_limit=memory_limit, retries=retries,
+                  thumbnails=thumbnails,
                   thumbnail_size=thumbnail_size, callback=callback,
                   skipped=len(inputs) - len(todo))
     elif callback is not None:
@@ -267,19 +267,20 @@ def run(paths, out_dir: str | os.PathLike, *, task: str, client=None, scheduler:
 
 
 def _run_jobs(todo, out: Path, task: str, options: dict, results: dict, *, client, scheduler,
-              workers,
-              memory_limit, retries, thumbnails, thumbnail_size, callback, skipped) -> None:
+              workers, memory_limit, retries, thumbnails, thumbnail_size, callback,
+              skipped) -> None:
     from distributed import as_completed
 
     if scheduler is None and workers is None:
         workers = min(os.cpu_count() or 1, len(todo))
     with (connect(scheduler, workers=workers, memory_limit=memory_limit, retries=retries)
-          if client is None else _borrowed(client)) as c:
+          if client is None else nullcontext(client)) as c:
         _single_threaded(c)
         nthreads = max(sum(c.nthreads().values()), 1)
         if callback is not None:
             callback({"event": "start", "dashboard": c.dashboard_link, "total": len(todo)
                       + skipped, "todo": len(todo), "skipped": skipped, "workers": nthreads})
+        writer = RecordWriter(out)
         token = secrets.token_hex(4)
         info = {}
         futures = []
@@ -294,7 +295,6 @@ def _run_jobs(todo, out: Path, task: str, options: dict, results: dict, *, clien
                          priority=size)  # big meshes first: shorter tail
             info[f.key] = (p, rel, o)
             futures.append(f)
-        writer = RecordWriter(out)
         counts = {"done": 0, "failed": 0}
         try:
             for f in as_completed(futures):
@@ -318,7 +318,3 @@ def _run_jobs(todo, out: Path, task: str, options: dict, results: dict, *, clien
             writer.close()
             remove_stale_temporaries([o for _, _, o in todo])
 
-
-@contextmanager
-def _borrowed(client) -> Iterator:
-    yield client
