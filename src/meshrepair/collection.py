@@ -21,6 +21,8 @@ import glob
 import json
 import logging
 import os
+import secrets
+from collections.abc import Callable
 from pathlib import Path
 
 from .errors import MeshRepairError
@@ -208,3 +210,20 @@ def remove_stale_temporaries(outputs: list[Path]) -> int:
             except OSError:
                 pass
     return n
+
+
+def atomic_write(path: str | os.PathLike, write: Callable[[Path], None]) -> Path:
+    """Call ``write(tmp)`` on a temporary file next to ``path``, then rename it to ``path``: the
+    file is either absent, the previous version or complete (the batch's thumbnails and
+    index.html; meshes are written by :func:`meshrepair.io.write_mesh`, atomic the same way).
+    The temporary name ``.NAME.PID.HEX.tmp`` is what :func:`remove_stale_temporaries` sweeps."""
+    p = Path(path)
+    p.parent.mkdir(parents=True, exist_ok=True)
+    tmp = p.parent / f".{p.name}.{os.getpid()}.{secrets.token_hex(4)}.tmp"
+    try:
+        write(tmp)
+        os.replace(tmp, p)
+    finally:
+        if tmp.exists():
+            tmp.unlink()
+    return p

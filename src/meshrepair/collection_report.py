@@ -12,10 +12,9 @@ from __future__ import annotations
 import datetime
 import html
 import os
-import secrets
 from pathlib import Path
 
-from .collection import INDEX, RECORDS
+from .collection import INDEX, RECORDS, atomic_write
 
 
 def _esc(x: object) -> str:
@@ -108,12 +107,4 @@ Records: <a href="{RECORDS}">{RECORDS}</a>.</p>
 {rows}
 </tbody></table></body></html>
 """
-    path = out / INDEX
-    tmp = out / f".{INDEX}.{os.getpid()}.{secrets.token_hex(4)}.tmp"
-    try:
-        tmp.write_text(page, encoding="utf-8")
-        os.replace(tmp, path)
-    finally:
-        if tmp.exists():
-            tmp.unlink()
-    return path
+    return atomic_write(out / INDEX, lambda tmp: tmp.write_text(page, encoding="utf-8"))

@@ -25,7 +25,6 @@ import inspect
 import json
 import logging
 import os
-import secrets
 import socket
 import time
 import traceback
@@ -235,14 +234,9 @@ class _WarningsCollector(logging.Handler):
 def _atomic_png(path: Path, image: np.ndarray) -> None:
     from matplotlib.image import imsave
 
-    path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.parent / f".{path.name}.{os.getpid()}.{secrets.token_hex(4)}.tmp"
-    try:
-        imsave(tmp, image, format="png")
-        os.replace(tmp, path)
-    finally:
-        if tmp.exists():
-            tmp.unlink()
+    from .collection import atomic_write
+
+    atomic_write(path, lambda tmp: imsave(tmp, image, format="png"))
 
 
 def _thumbnails(base: str, before, after, size: int) -> dict:
