@@ -364,3 +364,139 @@ def test_cli_compare_with_reference(tmp_path, capsys):
     args = _parser().parse_args(["compare", paths[0], str(out), "--titles", "a", "b"])
     with pytest.raises(MeshRepairError, match="titles"):
         args.func(args)
+
+
+# ------------------------------------------------------------------------------------------
+# aiming the camera, categorical colours
+
+
+def grid_with_patch(n: int = 40):
+    """A flat n x n grid in z = 0 (side 2) and a per-vertex mask of a small off-centre patch."""
+    V, F = square(0.0, size=1.0, n=n)
+    patch = (np.abs(V[:, 0] - 0.55) <= 0.1 + 1e-9) & (np.abs(V[:, 1] + 0.35) <= 0.1 + 1e-9)
+    return V, F, patch
+
+
+def blue_pixels(img: np.ndarray) -> np.ndarray:
+    i = img.astype(int)
+    return (i[..., 2] - i[..., 0]) > 60
+
+
+def test_look_at_frames_the_region_so_it_fills_most_of_the_image():
+    from meshrepair.framing import frame_vertices
+
+    V, F, patch = grid_with_patch()
+    kw = dict(region_mask=patch, color_by="none", width=160, height=120, colorbar=False)
+    whole = blue_pixels(render_mesh(V, F, **kw))
+    fr = frame_vertices(V, F, patch)
+    assert np.allclose(fr.center, [0.55, -0.35, 0.0]) and fr.normal @ [0, 0, 1] > 0.999
+    img = render_mesh(V, F, look_at=fr.center, radius=fr.radius, view_dir=-fr.normal, **kw)
+    framed = blue_pixels(img)
+    r0, r1, c0, c1 = bbox(framed)
+    # the patch (a square of half-side 0.1, radius 0.1*sqrt(2)) fills the 120 px height:
+    # side = 0.92 * 120 / sqrt(2) = 78 px, centred
+    assert framed.sum() > 20 * whole.sum()
+    assert abs((r1 - r0 + 1) - 0.92 * 120 / np.sqrt(2)) <= 3
+    assert abs((r0 + r1) / 2 - 59.5) <= 2 and abs((c0 + c1) / 2 - 79.5) <= 2
+    assert framed.mean() > 0.3  # the patch covers most of the picture around it
+    with pytest.raises(MeshRepairError, match="radius"):
+        render_mesh(V, F, look_at=fr.center)
+    with pytest.raises(MeshRepairError, match="not both"):
+        render_mesh(V, F, view_dir=[0, 0, -1], azimuth=10)
+    with pytest.raises(MeshRepairError, match="radius must be"):
+        render_mesh(V, F, look_at=fr.center, radius=-1.0)
+
+
+def test_view_dir_matches_the_angles():
+    V, F = cut_sphere()
+    kw = dict(width=60, height=60, colorbar=False, vmin=-2.0, vmax=2.0)
+    assert np.array_equal(render_mesh(V, F, view_dir=[-1, 0, 0], **kw),
+                          render_mesh(V, F, azimuth=90, **kw))
+    assert np.array_equal(render_mesh(V, F, view_dir=[0, 0, -1], **kw), render_mesh(V, F, **kw))
+
+
+def test_look_at_clips_what_is_in_front_of_the_region():
+    Va, Fa = square(0.0)  # the square to look at
+    Vb, Fb = square(1.0)  # a square in front of it, nearer to the camera on +z
+    V, F = np.concatenate([Va, Vb]), np.concatenate([Fa, Fb + len(Va)])
+    s = np.concatenate([np.zeros(len(Va)), np.ones(len(Vb))])
+    kw = dict(scalars=s, vmin=0.0, vmax=1.0, cmap="gray", colorbar=False, width=48, height=48,
+              categorical=False)
+    seen = render_mesh(V, F, look_at=[0, 0, 0], radius=0.5, **kw).astype(int)
+    assert seen[24, 24].mean() < 20  # the z = 0 square (black), the front one clipped away
+    hidden = render_mesh(V, F, look_at=[0, 0, 0], radius=0.5, clip=False, **kw).astype(int)
+    assert hidden[24, 24].mean() > 200
+
+
+def test_sparse_mask_gets_a_categorical_colour_bar():
+    from meshrepair.render import _MASK_COLOURS, _categories
+
+    V, F = sphere(3)
+    mask = np.zeros(len(V))
+    mask[:5] = 1.0  # sparse: its 2-98 % percentiles are both 0
+    cats, colours = _categories(mask, "scalars", None, None, None, None)
+    assert np.array_equal(cats, [0.0, 1.0]) and np.array_equal(colours, _MASK_COLOURS)
+    assert _categories(V[:, 0], "scalars", None, None, None, None) is None  # continuous
+    assert _categories(mask, "scalars", None, 0.0, 1.0, None) is None  # explicit range
+    img = render_mesh(V, F, scalars=mask, width=300, height=240)
+    bar = img[:, 212:].astype(int)  # the sphere fills the 218 x 240 px left of the bar
+    orange = np.all(np.abs(bar - np.round(_MASK_COLOURS[1] * 255)) <= 2, axis=2)
+    grey = np.all(np.abs(bar - np.round(_MASK_COLOURS[0] * 255)) <= 2, axis=2)
+    assert orange.sum() > 200 and grey.sum() > 200  # one box per category
+    # no continuous ramp: hardly any other coloured pixels in the bar
+    sat = (bar.max(axis=2) - bar.min(axis=2)) > 30
+    assert (sat & ~orange).sum() < 0.2 * orange.sum()
+    # the surface shows the few masked vertices' faces in orange (nearest-vertex colouring)
+    face = img[:, :212].astype(int)
+    assert np.any((face[..., 0] - face[..., 2]) > 100)
+
+
+def _holey_sphere():
+    V, F = sphere(3)
+    c = V[F].mean(axis=1)
+    F = F[c[:, 0] < 0.8]
+    used = np.unique(F)
+    remap = -np.ones(len(V), np.int64)
+    remap[used] = np.arange(len(used))
+    return V[used], remap[F]
+
+
+def test_cli_render_and_compare_frame_a_hole_and_a_region(tmp_path):
+    from matplotlib.image import imread
+
+    from meshrepair.cli import main
+
+    V, F = _holey_sphere()
+    holey = tmp_path / "holey.ply"
+    _write_mesh(holey, V, F)
+    filled = tmp_path / "filled.ply"
+    assert main(["fill", str(holey), str(filled), "-q"]) == 0
+    out = tmp_path / "hole.png"
+    assert main(["render", str(holey), str(out), "--frame-hole", "0", "--size", "200", "200",
+                 "--color", "none"]) == 0
+    img = (imread(out)[..., :3] * 255).astype(int)
+    # close up on the open cap (seen through it: the inside of the sphere), the surface covers
+    # (nearly) the whole picture (measured 91 %); the whole sphere covers ~66 % of it
+    assert foreground(img).mean() > 0.85
+    assert main(["render", str(holey), str(out), "--size", "200", "200", "--color", "none",
+                 "--view-dir=-1,0,0"]) == 0
+    assert foreground((imread(out)[..., :3] * 255).astype(int)).mean() < 0.75
+    # the filled patch, coloured by the 'filled' attribute (categorical), fills most of it
+    out2 = tmp_path / "patch.png"
+    assert main(["render", str(filled), str(out2), "--frame-region", "filled", "--color",
+                 "filled", "--size", "240", "200"]) == 0
+    img2 = (imread(out2)[..., :3] * 255).astype(int)
+    orange = (img2[..., 0] - img2[..., 2]) > 100
+    r0, r1, c0, c1 = bbox(orange[:, :170])  # left of the colour bar
+    assert r1 - r0 + 1 > 0.6 * 200 and orange[:, :170].mean() > 0.25
+    # compare: same camera on both, the attribute only on one mesh (grey on the other)
+    out3 = tmp_path / "cmp.png"
+    assert main(["compare", str(holey), str(filled), str(out3), "--frame-hole", "0",
+                 "--color", "filled", "--size", "150", "150"]) == 0
+    img3 = (imread(out3)[..., :3] * 255).astype(int)
+    right = img3[:, 150:300]
+    assert ((right[..., 0] - right[..., 2]) > 100).mean() > 0.2  # titles included
+    assert ((img3[:, :150, 0] - img3[:, :150, 2]) > 100).mean() < 0.01
+    assert main(["render", str(holey), str(out), "--frame-hole", "7"]) == 2
+    assert main(["render", str(holey), str(out), "--look-at", "0,0,0"]) == 2
+    assert main(["render", str(holey), str(out), "--frame-region", "nope"]) == 2

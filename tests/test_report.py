@@ -35,10 +35,13 @@ class PageParser(HTMLParser):
         self.cells: list[str] = []
         self.text: list[str] = []
         self.tags: list[str] = []
+        self.scripts: list[dict] = []
         self._in_cell = False
 
     def handle_starttag(self, tag, attrs):
         self.tags.append(tag)
+        if tag == "script":
+            self.scripts.append(dict(attrs))
         if tag == "img":
             self.images.append(dict(attrs).get("src", ""))
         elif tag == "table":
@@ -112,19 +115,27 @@ def test_report_is_self_contained_with_tables_images_and_metrics(tmp_path):
     assert len(pngs) >= 4 and len(pngs) == len(page.images)
     shapes = [decode_png(s).shape for s in pngs]
     assert all(h > 50 and w > 50 for h, w, _ in shapes)
-    # offline: no scripts, no external resources, text escaped
-    assert "script" not in page.tags and "link" not in page.tags
+    # offline: only inline scripts (the viewer: import map of data: URLs, its data, its module),
+    # no external resources, text escaped
+    assert "link" not in page.tags
+    assert [sc.get("type") for sc in page.scripts] == ["importmap", "application/json", "module"]
+    assert all("src" not in sc for sc in page.scripts)
+    imports = json.loads(raw.split('<script type="importmap">')[1].split("</script>")[0])
+    assert list(imports["imports"]) == ["three"]
+    assert imports["imports"]["three"].startswith("data:text/javascript;base64,")
     assert "http://" not in raw and "https://" not in raw
     assert "<denoising>" not in raw and "&lt;denoising&gt;" in raw
     assert "<b>" not in raw and "&lt;b&gt;not bold&lt;/b&gt;" in raw
     text = "".join(page.text)
     assert "M_E:" in text and "edges" in text and "M_V:" in text and "vertices" in text
+    assert "vertexs" not in raw  # the plural of the mask captions
+    assert f"of {len(V)} vertices on the output mesh" in text
 
 
 def test_report_without_optional_parts(tmp_path):
     V, F = sphere(1)
     out = tmp_path / "min.html"
-    write_report(out, title="minimal", output_mesh=(V, F), image_size=96)
+    write_report(out, title="minimal", output_mesh=(V, F), image_size=96, viewer=False)
     page = parse(out)
     text = "".join(page.text)
     assert "No convergence history recorded." in text and "No metrics given." in text
@@ -186,3 +197,49 @@ def test_cli_report(tmp_path):
     args = _parser().parse_args(["report", str(out), str(out)])
     with pytest.raises(MeshRepairError, match="overwrite"):
         args.func(args)
+
+
+def test_hole_table_says_what_happened_to_each_hole(tmp_path):
+    V, F = sphere(1)
+    holes = [
+        {"index": 0, "n_boundary": 40, "length": 2.5, "status": "filled", "reason": "plane",
+         "n_new_vertices": 12, "n_new_faces": 30, "n_intersections": 0},
+        {"index": 1, "n_boundary": 900, "length": 9.0, "status": "skipped",
+         "reason": "longer than --max-hole-size 50", "n_new_vertices": 0, "n_new_faces": 0,
+         "n_intersections": -1},
+        {"index": 2, "n_boundary": 7, "length": 0.3, "status": "refused",
+         "reason": "patch would intersect the mesh <x>"},
+    ]
+    out = tmp_path / "h.html"
+    write_report(out, title="holes", output_mesh=(V, F), holes=holes, image_size=96,
+                 viewer=False)
+    page = parse(out)
+    text = "".join(page.text)
+    assert "3 holes: 1 filled, 1 skipped, 1 refused." in text
+    for cell in ("plane", "longer than --max-hole-size 50", "refused", "not checked", "900"):
+        assert cell in page.cells
+    assert "patch would intersect the mesh <x>" in page.cells  # escaped in the file
+    assert "<x>" not in out.read_text(encoding="utf-8")
+
+
+def test_fill_report_has_hole_table_and_3d_view_of_the_holes(tmp_path):
+    from meshrepair.cli import main
+
+    V, F = sphere(3)
+    c = V[F].mean(axis=1)
+    F = F[(c[:, 0] < 0.8) & (c[:, 1] < 0.93)]
+    src = tmp_path / "holey.ply"
+    trimesh.Trimesh(V, F, process=False).export(src)
+    rep = tmp_path / "fill.html"
+    assert main(["fill", str(src), str(tmp_path / "out.ply"), "-q", "--max-hole-size", "20",
+                 "--report", str(rep)]) == 0
+    raw = rep.read_text(encoding="utf-8")
+    page = parse(rep)
+    assert "filled" in page.cells and "skipped" in page.cells
+    data = json.loads(raw.split('id="mr-viewer-data">')[1].split("</script>")[0])
+    assert [p["title"] for p in data["panes"]] == ["input", "output"]
+    assert [r["name"] for r in data["regions"]] == ["hole 0", "hole 1"]
+    details = [r["detail"] for r in data["regions"]]
+    assert details[0].startswith("skipped: ") and details[1].startswith("filled (")
+    assert data["panes"][1]["highlightLabel"] == "filled faces"
+    assert data["panes"][1]["highlightCount"] > 0

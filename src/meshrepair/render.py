@@ -36,6 +36,16 @@ Camera: orthographic, ``azimuth`` rotates about the vertical ``+y`` axis and ``e
 towards it (degrees); ``azimuth = elevation = 0`` looks from ``+z`` towards ``-z`` with ``+y`` up.
 The view is fitted so that the projected mesh (or the ``fit_bounds`` box, or in
 :func:`compare_figure` the union of all meshes) fills the picture with a 4 % margin.
+A camera can instead be *aimed*: ``view_dir`` (the direction it looks in) replaces the angles,
+and ``look_at`` with ``radius`` fits the sphere around that point into the picture (4 % margin)
+and, by default, clips away what lies between the camera and the sphere (depth test against the
+near plane ``depth(look_at) - radius``). :mod:`meshrepair.framing` computes such spheres and
+normals for a hole or a region.
+
+Categorical colouring: per-vertex values that are a few integers (a 0/1 mask, labels) are drawn
+with one flat colour per value (nearest vertex, no blending) and a colour bar with one box per
+value; a continuous colour bar would show a meaningless range (a sparse 0/1 mask has its 2-98 %
+percentiles both at 0).
 """
 
 from __future__ import annotations
@@ -168,7 +178,7 @@ def _project(
 
 
 def _rasterize(
-    xyz: np.ndarray, F: np.ndarray, width: int, height: int
+    xyz: np.ndarray, F: np.ndarray, width: int, height: int, near: float = -np.inf
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Z-buffer rasterisation of projected triangles.
 
@@ -176,6 +186,8 @@ def _rasterize(
     ----------
     xyz : (nV, 3) screen coordinates and depth (see :func:`_project`)
     F : (nF, 3) int64
+    near : float
+        Pixels with depth below ``near`` (nearer the camera) are clipped away.
 
     Returns
     -------
@@ -245,6 +257,9 @@ def _rasterize(
             d = depth[li]
             z = d[:, 0] * fx + d[:, 1] * fy + d[:, 2]
             pid = py[inside] * width + px[inside]
+            if near > -np.inf:
+                front = z >= near
+                li, b1, b2, z, pid = li[front], b1[front], b2[front], z[front], pid[front]
             np.minimum.at(zbuf, pid, z)
             win = z <= zbuf[pid]
             pw = pid[win]
@@ -265,6 +280,7 @@ def _draw_edges(
     *,
     tol: float,
     thickness: int,
+    near: float = -np.inf,
 ) -> None:
     """Draw depth-tested line segments (in place) into ``rgb`` of shape ``(H*W, 3)``."""
     if len(edges) == 0:
@@ -280,7 +296,7 @@ def _draw_edges(
     iy = np.floor(p[:, 1]).astype(np.int64)
     ok = (ix >= 0) & (ix < width) & (iy >= 0) & (iy < height)
     ix, iy, z = ix[ok], iy[ok], p[ok, 2]
-    vis = z <= zbuf[iy * width + ix] + tol
+    vis = (z <= zbuf[iy * width + ix] + tol) & (z >= near)
     ix, iy = ix[vis], iy[vis]
     for ox in range(thickness):
         for oy in range(thickness):
@@ -369,12 +385,18 @@ def _raster(
     width: int,
     height: int,
     supersample: int,
+    near: float = -np.inf,
+    categories: tuple[np.ndarray, np.ndarray] | None = None,
 ) -> np.ndarray:
-    """Render the mesh alone into a float ``(H, W, 3)`` image in ``[0, 1]``."""
+    """Render the mesh alone into a float ``(H, W, 3)`` image in ``[0, 1]``.
+
+    ``categories``: (values ``(k,)``, colours ``(k, 3)``): draw each pixel in the colour of the
+    category of its nearest vertex (or its face), no interpolation between categories.
+    """
     s = supersample
     W, H = width * s, height * s
     xyz, world_per_px = _project(V, axes, window, W, H)
-    fbuf, b1, b2, zbuf = _rasterize(xyz, F, W, H)
+    fbuf, b1, b2, zbuf = _rasterize(xyz, F, W, H, near=near)
     rgb = np.ones((W * H, 3))
     hit = np.flatnonzero(fbuf >= 0)
     f = fbuf[hit]
@@ -389,6 +411,16 @@ def _raster(
     shade = _AMBIENT + (1.0 - _AMBIENT) * np.abs(n @ axes[2])
     if values is None:
         base = np.broadcast_to(_BASE_GREY, (len(hit), 3)).copy()
+    elif categories is not None:
+        if len(values) == len(V):
+            nearest = np.argmax(np.concatenate([w0, w1, w2], axis=1), axis=1)
+            val = values[F[f, nearest]]
+        else:
+            val = values[f]
+        cats, colours = categories
+        k = np.clip(np.searchsorted(cats, val), 0, len(cats) - 1)
+        base = colours[k].copy()
+        base[~(cats[k] == val)] = _NAN_GREY
     else:
         if len(values) == len(V):
             val = (
@@ -410,6 +442,7 @@ def _raster(
         _draw_edges(
             rgb, xyz, edges, zbuf, W, H,
             tol=3.0 * world_per_px, thickness=max(1, round(s * max(width, height) / 500)),
+            near=near,
         )  # fmt: skip
     img = rgb.reshape(H, W, 3)
     if s > 1:
@@ -448,14 +481,27 @@ def _figure_to_array(fig) -> np.ndarray:
     return np.asarray(fig.canvas.buffer_rgba())[..., :3].copy()
 
 
-def _add_colorbar(fig, rect_px, total_w, total_h, vmin, vmax, cmap, label, fs_pt) -> None:
+def _add_colorbar(fig, rect_px, total_w, total_h, vmin, vmax, cmap, label, fs_pt,
+                  categories=None) -> None:
     import matplotlib
     from matplotlib.cm import ScalarMappable
-    from matplotlib.colors import Normalize
+    from matplotlib.colors import BoundaryNorm, ListedColormap, Normalize
     from matplotlib.ticker import MaxNLocator
 
     x, y, w, h = rect_px
     cax = fig.add_axes((x / total_w, y / total_h, w / total_w, h / total_h))
+    if categories is not None:  # one box per category, labelled with its value
+        cats, colours = categories
+        k = len(cats)
+        sm = ScalarMappable(norm=BoundaryNorm(np.arange(k + 1) - 0.5, k),
+                            cmap=ListedColormap(colours))
+        cb = fig.colorbar(sm, cax=cax, ticks=np.arange(k))
+        cb.ax.set_yticklabels([f"{c:g}" for c in cats])
+        cb.ax.tick_params(labelsize=fs_pt * 0.85, length=0)
+        if label:
+            cb.set_label(label, fontsize=fs_pt * 0.85)
+        cb.outline.set_linewidth(0.6)
+        return
     sm = ScalarMappable(norm=Normalize(vmin=vmin, vmax=vmax), cmap=matplotlib.colormaps[cmap])
     cb = fig.colorbar(sm, cax=cax)
     cb.locator = MaxNLocator(nbins=5)
@@ -493,6 +539,11 @@ def render_mesh(
     fit_bounds: np.ndarray | None = None,
     supersample: int = 1,
     colorbar_label: str | None = None,
+    view_dir: np.ndarray | None = None,
+    look_at: np.ndarray | None = None,
+    radius: float | None = None,
+    clip: bool = True,
+    categorical: bool | None = None,
 ) -> np.ndarray:
     """Render a triangle mesh to an RGB image (headless, white background).
 
@@ -544,6 +595,24 @@ def render_mesh(
         ``supersample**2`` times the raster time).
     colorbar_label : str, optional
         Label of the colour bar (default "mean curvature" for curvature colouring).
+    view_dir : (3,) float, optional
+        Direction the camera looks in (instead of ``azimuth``/``elevation``); ``(0, 0, -1)``
+        is the default view. Up on the picture is ``+y`` (``-z`` or ``+z`` when looking
+        vertically), see :func:`meshrepair.framing.view_axes`.
+    look_at : (3,) float, optional
+        Point at the centre of the picture; the view is fitted to the sphere of ``radius``
+        around it instead of the whole mesh (aim at a region with
+        :func:`meshrepair.framing.frame_faces` / :func:`~meshrepair.framing.frame_hole`).
+    radius : float, optional
+        Radius of that sphere (required with ``look_at``, > 0).
+    clip : bool
+        With ``look_at``: clip away the geometry between the camera and the sphere, so a region
+        inside a cavity or behind another part is visible.
+    categorical : bool, optional
+        Colour ``scalars`` by category (one flat colour per distinct value, no interpolation,
+        a colour bar with one box per value). Default: automatic for ``color_by="scalars"``
+        when the finite values are at most 12 distinct integers (e.g. a 0/1 mask) and no
+        ``vmin``/``vmax`` is given.
 
     Returns
     -------
@@ -566,13 +635,17 @@ def render_mesh(
     mode = _resolve_color_mode(color_by, scalars)
     values = _scalar_field(V, F, mode, scalars)
     lo, hi = _value_range(values, mode, clip_percentile, vmin, vmax)
+    cats = _categories(values, mode, categorical, vmin, vmax, cmap)
     cmap = cmap or ("coolwarm" if mode == "curvature" else "viridis")
     _lut(cmap)  # validate early
     em = _selected_edges(F, len(V), edge_mask)
     hl = _face_highlight(F, len(V), region_mask)
-    axes = _camera_axes(azimuth or 0.0, elevation or 0.0)
-    fit_pts = V if fit_bounds is None else _box_corners(_check_bounds(fit_bounds))
-    window = _view_window(fit_pts, axes)
+    axes, window, near = _aim(azimuth, elevation, view_dir, look_at, radius, clip)
+    if window is None:
+        fit_pts = V if fit_bounds is None else _box_corners(_check_bounds(fit_bounds))
+        window = _view_window(fit_pts, axes)
+    elif fit_bounds is not None:
+        raise MeshRepairError("pass either look_at/radius or fit_bounds, not both")
     draw_cb = colorbar and values is not None
     dpi = 100.0
     fs = _font_pt(width, height)
@@ -587,7 +660,7 @@ def render_mesh(
     img = _raster(
         V, F, values=values, vmin=lo, vmax=hi, cmap=cmap, shading=shading, edges=em,
         face_highlight=hl, axes=axes, window=window, width=vw, height=vh,
-        supersample=supersample,
+        supersample=supersample, near=near, categories=cats,
     )  # fmt: skip
     raster = _to_uint8(img)
     if not draw_cb and not title:
@@ -606,9 +679,72 @@ def render_mesh(
         bar_w = max(6, int(round(1.0 * fs * dpi / 72.0)))
         bar_h = int(0.7 * vh)
         _add_colorbar(
-            fig, (vw + 4, (vh - bar_h) / 2, bar_w, bar_h), width, height, lo, hi, cmap, label, fs
+            fig, (vw + 4, (vh - bar_h) / 2, bar_w, bar_h), width, height, lo, hi, cmap, label, fs,
+            categories=cats,
         )
     return _figure_to_array(fig)
+
+
+_MASK_COLOURS = np.array([_BASE_GREY, [0.95, 0.45, 0.10]])  # 0/1 masks: grey, orange
+_MAX_CATEGORIES = 12
+
+
+def _categories(values, mode, categorical, vmin, vmax, cmap) -> tuple | None:
+    """(values (k,), colours (k, 3)) when ``values`` are to be coloured by category."""
+    if values is None or mode != "scalars" or categorical is False:
+        return None
+    v = values[np.isfinite(values)]
+    cats = np.unique(v)
+    is_int = cats.size > 0 and bool(np.all(cats == np.round(cats)))
+    if categorical is None:
+        if not (is_int and cats.size <= _MAX_CATEGORIES) or vmin is not None or vmax is not None:
+            return None
+    elif cats.size > 64:
+        raise MeshRepairError(
+            f"categorical colouring needs at most 64 distinct values, got {cats.size}; pass "
+            "categorical=False for a continuous colour map")
+    if cats.size == 0:
+        cats = np.array([0.0])
+    if cmap is None and cats.size <= 2 and np.all(np.isin(cats, (0.0, 1.0))):
+        colours = _MASK_COLOURS[cats.astype(int)]
+    else:
+        import matplotlib
+
+        cm = matplotlib.colormaps[cmap or ("tab10" if cats.size <= 10 else "tab20")]
+        if getattr(cm, "N", 256) >= 256:  # continuous map: sample it evenly
+            colours = cm(np.linspace(0.0, 1.0, cats.size))[:, :3]
+        else:
+            colours = cm(np.arange(cats.size) % cm.N)[:, :3]
+    return cats, np.asarray(colours, dtype=np.float64)
+
+
+def _aim(azimuth, elevation, view_dir, look_at, radius, clip):
+    """Camera axes, the fitted window (None: fit the mesh) and the near clipping depth."""
+    from .framing import view_axes
+
+    if view_dir is not None:
+        if azimuth is not None or elevation is not None:
+            raise MeshRepairError("pass either view_dir or azimuth/elevation, not both")
+        axes = view_axes(view_dir)
+    else:
+        axes = _camera_axes(azimuth or 0.0, elevation or 0.0)
+    if look_at is None:
+        if radius is not None:
+            raise MeshRepairError("radius needs look_at (the point to frame)")
+        return axes, None, -np.inf
+    c = np.asarray(look_at, dtype=np.float64).ravel()
+    if c.shape != (3,) or not np.all(np.isfinite(c)):
+        raise MeshRepairError(f"look_at must be 3 finite numbers, got {look_at}")
+    try:
+        r = float(radius)  # type: ignore[arg-type]
+    except (TypeError, ValueError) as exc:
+        raise MeshRepairError("look_at needs radius=<size of the region to frame>") from exc
+    if not (np.isfinite(r) and r > 0):
+        raise MeshRepairError(f"radius must be a finite number > 0, got {radius}")
+    pc = axes[:2] @ c
+    window = np.stack([pc - r, pc + r])
+    near = float(-(c @ axes[2]) - r) if clip else -np.inf
+    return axes, window, near
 
 
 def _value_range(values, mode, clip_percentile, vmin, vmax) -> tuple[float, float]:
@@ -734,6 +870,7 @@ def compare_figure(
         (default 600 x 600); ``scalars`` may be a list with one array per mesh. The colour range
         is computed once from all meshes' values (robust percentiles) unless ``vmin``/``vmax``
         are given; ``edge_mask``/``region_mask`` may be lists with one entry (or None) per mesh.
+        ``view_dir``/``look_at``/``radius``/``clip`` aim the one camera of all panels.
 
     Returns
     -------
@@ -761,6 +898,9 @@ def compare_figure(
         raise MeshRepairError(f"shading must be one of {_SHADINGS}, got {shading!r}")
     supersample = int(kw.pop("supersample", 1))
     azimuth, elevation = kw.pop("azimuth", None), kw.pop("elevation", None)
+    view_dir, look_at = kw.pop("view_dir", None), kw.pop("look_at", None)
+    radius, clip_front = kw.pop("radius", None), bool(kw.pop("clip", True))
+    categorical = kw.pop("categorical", None)
     scalars = kw.pop("scalars", None)
     edge_masks = _per_mesh(kw.pop("edge_mask", None), n, "edge_mask")
     region_masks = _per_mesh(kw.pop("region_mask", None), n, "region_mask")
@@ -777,18 +917,23 @@ def compare_figure(
         lo, hi = 0.0, 1.0
     else:
         lo, hi = _value_range(np.concatenate(values), mode, clip, vmin, vmax)
+    cats = None
+    if values[0] is not None:
+        cats = _categories(np.concatenate(values), mode, categorical, vmin, vmax, cmap)
     cmap = cmap or ("coolwarm" if mode == "curvature" else "viridis")
     _lut(cmap)
-    axes = _camera_axes(azimuth or 0.0, elevation or 0.0)
-    fitted = checked if fit == "union" else checked[:1]
-    wins = np.stack([_view_window(V, axes) for V, _ in fitted])
-    window = np.stack([wins[:, 0].min(axis=0), wins[:, 1].max(axis=0)])
+    axes, window, near = _aim(azimuth, elevation, view_dir, look_at, radius, clip_front)
+    if window is None:
+        fitted = checked if fit == "union" else checked[:1]
+        wins = np.stack([_view_window(V, axes) for V, _ in fitted])
+        window = np.stack([wins[:, 0].min(axis=0), wins[:, 1].max(axis=0)])
     panels = []
     for (V, F), val, em, rm in zip(checked, values, edge_masks, region_masks, strict=True):
         img = _raster(
             V, F, values=val, vmin=lo, vmax=hi, cmap=cmap, shading=shading,
             edges=_selected_edges(F, len(V), em), face_highlight=_face_highlight(F, len(V), rm),
             axes=axes, window=window, width=width, height=height, supersample=supersample,
+            near=near, categories=cats,
         )  # fmt: skip
         panels.append(_to_uint8(img))
     dpi = 100.0
@@ -824,7 +969,7 @@ def compare_figure(
         bar_h = int(0.7 * height)
         _add_colorbar(
             fig, (n * width + 4, metric_h + (height - bar_h) / 2, bar_w, bar_h),
-            tot_w, tot_h, lo, hi, cmap, label, fs,
+            tot_w, tot_h, lo, hi, cmap, label, fs, categories=cats,
         )  # fmt: skip
     img = _figure_to_array(fig)
     if out_path is not None:

@@ -1,10 +1,13 @@
 """A self-contained HTML report of one repair run.
 
 :func:`write_report` writes ONE HTML file that opens offline in any browser: every picture is an
-embedded ``data:image/png;base64,...`` URI, the style sheet is inline and there is no JavaScript.
-The page shows the input and output renders (same camera, one curvature colour range), each mask
-drawn over the mesh it belongs to, a metrics table, a convergence plot of the solver history
-(matplotlib, Agg backend) and the parameters and timings tables. All text is HTML-escaped.
+embedded ``data:image/png;base64,...`` URI, the style sheet is inline, and the interactive 3-D
+viewer (:mod:`meshrepair.viewer`: three.js carried in the page as a ``data:`` module, the meshes
+as base64 binary) needs no server or network. The page shows the 3-D view, a per-hole table
+(fill/inpaint: filled, skipped or refused, and why), the input and output renders (same camera,
+one curvature colour range), each mask drawn over the mesh it belongs to, a metrics table, a
+convergence plot of the solver history (matplotlib, Agg backend) and the parameters and timings
+tables. All text is HTML-escaped.
 """
 
 from __future__ import annotations
@@ -298,8 +301,18 @@ def write_report(
     image_size: int = 480,
     azimuth: float | None = None,
     elevation: float | None = None,
+    holes: Sequence[Mapping] | None = None,
+    viewer: bool = True,
+    highlight: np.ndarray | None = None,
+    highlight_label: str = "filled faces",
+    regions: Sequence | None = None,
+    region_details: Sequence[str] | None = None,
+    sharp_mask: np.ndarray | None = None,
+    output_attributes: Mapping[str, np.ndarray] | None = None,
+    face_budget: int | None = None,
 ) -> Path:
-    """Write a self-contained HTML report (images embedded, no external files or scripts).
+    """Write a self-contained HTML report (images and the 3-D viewer embedded, no external
+    files, opens offline).
 
     Parameters
     ----------
@@ -327,6 +340,25 @@ def write_report(
         Size in pixels of each mesh panel.
     azimuth, elevation : float, optional
         Camera angles for every render (see :func:`meshrepair.render.render_mesh`).
+    holes : list of dict, optional
+        Per-hole records of a fill/inpaint run (``HoleReport.as_dict()``: index, n_boundary,
+        length, status, reason, n_new_vertices, n_new_faces, n_intersections), shown as a table
+        saying which holes were filled, skipped or refused and why.
+    viewer : bool
+        Add the interactive 3-D viewer (:mod:`meshrepair.viewer`): input and output side by
+        side with linked cameras.
+    highlight : (nF_out,) bool, optional
+        Output faces highlighted in the viewer (filled, inpainted or template faces), named
+        ``highlight_label``.
+    regions, region_details : list of Frame and of str, optional
+        Holes/regions listed in the viewer with "go to"; default: the open holes of the input
+        and the connected parts of ``highlight``.
+    sharp_mask : (nE_out,) bool, optional
+        ``M_E`` of the output for the viewer's sharp-edge overlay (default: dihedral > 30 deg).
+    output_attributes : dict, optional
+        Per-vertex values of the output offered as colourings in the viewer.
+    face_budget : int, optional
+        Faces per viewer pane above which a decimated copy is shown.
 
     Returns
     -------
@@ -359,6 +391,16 @@ def write_report(
     parts.append(_img(_png_bytes(fig), "input and output renders",
                       "Discrete mean curvature, same camera and colour range."))
 
+    # --- 3-D viewer
+    if viewer:
+        parts.append(_viewer_part(inp, out, highlight, highlight_label, regions, region_details,
+                                  sharp_mask, output_attributes, face_budget))
+
+    # --- holes
+    if holes is not None:
+        parts.append("<h2>Holes</h2>")
+        parts.append(hole_table(holes))
+
     # --- masks
     if masks:
         parts.append("<h2>Masks</h2>")
@@ -372,8 +414,9 @@ def write_report(
                 V, F, color_by="none", shading="smooth", width=size, height=size,
                 colorbar=False, title=str(name), **kw, **cam,
             )  # fmt: skip
+            plural = {"vertex": "vertices", "face": "faces", "edge": "edges"}[kind]
             parts.append(_img(_png_bytes(img), f"mask {name}",
-                              f"{name}: {on} of {m.shape[0]} {kind}s on the {label} mesh"))
+                              f"{name}: {on} of {m.shape[0]} {plural} on the {label} mesh"))
 
     # --- metrics
     parts.append("<h2>Metrics</h2>")
@@ -424,11 +467,71 @@ def write_report(
             "",
         ]
     )
+    from .viewer import write_text_atomic
+
     p = Path(path)
     p.parent.mkdir(parents=True, exist_ok=True)
-    p.write_text(page, encoding="utf-8")
+    write_text_atomic(p, page)
     log.info("wrote report %s (%.1f kB)", p, len(page) / 1024)
     return p
+
+
+def _viewer_part(inp, out, highlight, highlight_label, regions, region_details, sharp_mask,
+                 output_attributes, face_budget) -> str:
+    from .viewer import DEFAULT_FACE_BUDGET, viewer_section
+    from .viewer.content import mesh_pane, mesh_regions
+
+    panes = []
+    if inp is not None:
+        panes.append(mesh_pane(*inp, "input"))
+    hl = None
+    if highlight is not None:
+        hl = np.asarray(highlight).ravel()
+        if hl.shape[0] != len(out[1]):
+            raise MeshRepairError(f"highlight has {hl.shape[0]} entries for {len(out[1])} "
+                                  "output faces")
+        hl = hl.astype(bool)
+    panes.append(mesh_pane(*out, "output", attributes=output_attributes, highlight=hl,
+                           highlight_label=highlight_label, sharp_mask=sharp_mask))
+    if regions is None:
+        regions, region_details = [], []
+        if inp is not None:
+            r, d = mesh_regions(*inp, prefix="input ")
+            regions, region_details = r, d
+        r, d = mesh_regions(*out, highlight=panes[-1].highlight, prefix="output ",
+                            label=panes[-1].highlight_label.replace(" faces", ""))
+        regions, region_details = regions + r, region_details + d
+    section = viewer_section(panes, regions, region_details=region_details,
+                             face_budget=face_budget or DEFAULT_FACE_BUDGET)
+    return ("<h2>3-D view</h2>\n<p class=\"note\">Input and output with linked cameras; "
+            "the pictures below are fixed views of the same meshes.</p>\n" + section)
+
+
+def hole_table(holes: Sequence[Mapping]) -> str:
+    """HTML table of per-hole records: what happened to each hole and why."""
+    if not holes:
+        return '<p class="note">The mesh had no holes.</p>'
+    cols = [("index", "hole"), ("n_boundary", "boundary edges"), ("length", "length"),
+            ("status", "status"), ("reason", "how / why"), ("n_new_vertices", "new vertices"),
+            ("n_new_faces", "new faces"), ("n_intersections", "intersections")]
+    out = ["<table>", "<tr>" + "".join(f"<th>{_esc(h)}</th>" for _, h in cols) + "</tr>"]
+    for rec in holes:
+        rec = dict(rec) if isinstance(rec, Mapping) else dict(rec.as_dict())
+        cells = []
+        for key, _ in cols:
+            v = rec.get(key, "")
+            if key == "n_intersections" and _is_number(v) and v < 0:
+                v = "not checked"
+            cls = ' class="num"' if _is_number(v) else ""
+            cells.append(f"<td{cls}>{_esc(_fmt(v))}</td>")
+        out.append("<tr>" + "".join(cells) + "</tr>")
+    out.append("</table>")
+    counts: dict[str, int] = {}
+    for rec in holes:
+        st = str((rec if isinstance(rec, Mapping) else rec.as_dict()).get("status", "?"))
+        counts[st] = counts.get(st, 0) + 1
+    summary = ", ".join(f"{n} {st}" for st, n in counts.items())
+    return f"<p>{len(holes)} holes: {_esc(summary)}.</p>\n" + "\n".join(out)
 
 
 def _history_summary(history: Sequence[Mapping]) -> str:

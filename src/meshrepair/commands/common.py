@@ -66,7 +66,8 @@ def add_report_option(p) -> None:
 
 
 def write_run_report(path: str | None, *, title: str, input_mesh, output_mesh, masks: dict,
-                     history: list, parameters: dict, metrics: dict, timings: dict) -> None:
+                     history: list, parameters: dict, metrics: dict, timings: dict,
+                     **extra) -> None:
     """Write the HTML report of a run if ``path`` is given (see :mod:`meshrepair.report`)."""
     if not path:
         return
@@ -77,5 +78,6 @@ def write_run_report(path: str | None, *, title: str, input_mesh, output_mesh, m
     params = {k: (v if isinstance(v, (int, float, str, bool, type(None))) else str(v))
               for k, v in parameters.items()}
     write_report(path, title=title, input_mesh=input_mesh, output_mesh=output_mesh, masks=masks,
-                 history=history, parameters=params, metrics=metrics, timings=timings)
+                 history=history, parameters=params, metrics=metrics, timings=timings,
+                 **extra)  # extra: holes, highlight, regions, ... (see write_report)
     print(f"wrote {path}")

@@ -147,8 +147,12 @@ def run_complete(args: argparse.Namespace) -> int:
           f"({time.perf_counter() - t0:.2f} s)")
     from .common import write_run_report
 
+    tmpl_v = np.zeros(len(res.V), bool)
+    tmpl_v[res.template_vertices] = True
     write_run_report(
         args.report, title=f"meshrepair complete {Path(args.input).name}",
+        highlight=tmpl_v[res.F].all(axis=1), highlight_label="template faces",
+        sharp_mask=res.M_E,
         input_mesh=(mesh.V, mesh.F), output_mesh=(res.V, res.F),
         masks={"M_V": res.M_V, "M_E": res.M_E}, history=res.history, parameters=res.params,
         metrics={"seam vertices": c["n_seam"], "rms boundary before": c["rms_before"],

@@ -69,6 +69,7 @@ def run_denoise(args: argparse.Namespace) -> int:
         write_report(args.report, title=f"meshrepair denoise {Path(args.input).name}",
                      input_mesh=(m.V, m.F), output_mesh=(r.V, r.F),
                      masks={"M_E": r.M_E}, history=r.history, parameters=r.params,
+                     sharp_mask=r.M_E,
                      metrics={"noise estimate": r.noise_estimate, "iterations": r.iterations},
                      timings={"total s": dt})
         print(f"wrote {args.report}")

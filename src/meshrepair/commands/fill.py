@@ -63,8 +63,18 @@ def _write(out: Path, res, log_path: str | None, extra: dict) -> None:
 def _report(args: argparse.Namespace, res, m) -> None:
     from .common import write_run_report
 
+    if not args.report:
+        return
+    from ..viewer.content import hole_regions
+
+    highlight = np.zeros(len(res.F), bool)
+    highlight[res.new_faces] = True
+    regions, details = hole_regions(res.V, res.F, res.holes)
     write_run_report(
         args.report, title=f"meshrepair {args.command} {Path(args.input).name}",
+        holes=[h.as_dict() for h in res.holes], highlight=highlight,
+        highlight_label="inpainted faces" if args.command == "inpaint" else "filled faces",
+        regions=regions, region_details=details, sharp_mask=res.M_E,
         input_mesh=(m.V, m.F), output_mesh=(res.V, res.F),
         masks={"filled_V": res.filled_mask, "M_E": res.M_E}, history=res.history,
         parameters=res.params, timings=res.timings,

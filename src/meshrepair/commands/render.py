@@ -124,6 +124,100 @@ def _add_view_options(p: argparse.ArgumentParser) -> None:
                    help="dihedral angle threshold for --sharp-edges (default 30)")
     p.add_argument("--supersample", type=int, default=1, choices=(1, 2, 3),
                    help="anti-aliasing factor (default 1)")
+    a = p.add_argument_group("aiming the camera (instead of fitting the whole mesh)")
+    a.add_argument("--view-dir", default=None, metavar="DX,DY,DZ",
+                   help="direction the camera looks in (replaces --azimuth/--elevation; "
+                   "write --view-dir=-1,0,0 when it starts with a minus); default with "
+                   "--frame-*: straight at the region, against its normal")
+    a.add_argument("--look-at", default=None, metavar="X,Y,Z",
+                   help="point at the centre of the picture (needs --radius; "
+                   "--look-at=-1,0,0 for a leading minus)")
+    a.add_argument("--radius", type=float, default=None, metavar="R",
+                   help="radius of the sphere around --look-at (or the framed region) that "
+                   "fills the picture")
+    a.add_argument("--frame-hole", type=int, default=None, metavar="N",
+                   help="frame hole N of the (first) mesh, numbered as 'meshrepair fill --list'")
+    a.add_argument("--frame-region", default=None, metavar="ATTR|FILE.npy",
+                   help="frame the vertices where a 0/1 mask is set: a per-vertex attribute of "
+                   "the (first) mesh (e.g. 'filled') or a .npy mask (per vertex or per face)")
+    a.add_argument("--frame-scale", type=float, default=1.25, metavar="S",
+                   help="with --frame-*: the picture shows S times the region's radius "
+                   "(default 1.25)")
+    a.add_argument("--no-clip", action="store_true",
+                   help="with --look-at/--frame-*: keep the geometry between the camera and the "
+                   "region (default: clipped away)")
+
+
+def _vec3(text: str, what: str) -> np.ndarray:
+    try:
+        v = np.array([float(t) for t in text.replace(" ", "").split(",")])
+    except ValueError:
+        v = np.zeros(0)
+    if v.shape != (3,) or not np.all(np.isfinite(v)):
+        raise MeshRepairError(f"{what} needs 3 comma-separated numbers, got {text!r}")
+    return v
+
+
+def _region_frame(spec: str, mesh: LoadedMesh):
+    """Frame of the mask ``spec`` (vertex attribute name or .npy file) on ``mesh``."""
+    from ..framing import frame_faces, frame_vertices
+
+    if spec.lower().endswith(".npy"):
+        p = Path(spec)
+        if not p.is_file():
+            raise MeshRepairError(f"--frame-region file {spec!r} does not exist")
+        m = np.asarray(np.load(p, allow_pickle=False)).ravel()
+    elif spec in mesh.vertex_attributes:
+        m = np.asarray(mesh.vertex_attributes[spec]).ravel()
+    else:
+        names = ", ".join(sorted(mesh.vertex_attributes)) or "none"
+        raise MeshRepairError(f"--frame-region {spec!r} is neither a .npy file nor a vertex "
+                              f"attribute of the mesh (attributes: {names})")
+    sel = np.nan_to_num(m.astype(np.float64)) > 0.5
+    if not sel.any():
+        raise MeshRepairError(f"--frame-region {spec!r} selects nothing (no value above 0.5)")
+    if len(sel) == len(mesh.V):
+        return frame_vertices(mesh.V, mesh.F, sel, name=spec)
+    if len(sel) == len(mesh.F):
+        return frame_faces(mesh.V, mesh.F, sel, name=spec)
+    raise MeshRepairError(f"--frame-region {spec!r} has {len(sel)} values; the mesh has "
+                          f"{len(mesh.V)} vertices and {len(mesh.F)} faces")
+
+
+def aim_options(args: argparse.Namespace, mesh: LoadedMesh) -> dict:
+    """Camera keywords of :func:`meshrepair.render.render_mesh` from the aiming options."""
+    from ..framing import frame_hole
+
+    framed = [o for o in ("look_at", "frame_hole", "frame_region")
+              if getattr(args, o, None) is not None]
+    if len(framed) > 1:
+        raise MeshRepairError("give only one of --look-at, --frame-hole, --frame-region")
+    if args.view_dir is not None and (args.azimuth is not None or args.elevation is not None):
+        raise MeshRepairError("give either --view-dir or --azimuth/--elevation, not both")
+    if not (np.isfinite(args.frame_scale) and args.frame_scale > 0):
+        raise MeshRepairError(f"--frame-scale must be > 0, got {args.frame_scale}")
+    kw: dict = {"azimuth": args.azimuth, "elevation": args.elevation}
+    if args.view_dir is not None:
+        kw = {"view_dir": _vec3(args.view_dir, "--view-dir")}
+    if args.radius is not None and not (np.isfinite(args.radius) and args.radius > 0):
+        raise MeshRepairError(f"--radius must be a number > 0, got {args.radius}")
+    if args.look_at is not None:
+        if args.radius is None:
+            raise MeshRepairError("--look-at needs --radius R (the size of the part to show)")
+        kw.update(look_at=_vec3(args.look_at, "--look-at"), radius=args.radius)
+    elif framed:
+        fr = (frame_hole(mesh.V, mesh.F, args.frame_hole) if args.frame_hole is not None
+              else _region_frame(args.frame_region, mesh))
+        r = args.radius if args.radius is not None else fr.radius * args.frame_scale
+        kw.update(look_at=fr.center, radius=r)
+        if fr.normal is not None and "view_dir" not in kw and args.azimuth is None \
+                and args.elevation is None:
+            kw = {"view_dir": -fr.normal, "look_at": fr.center, "radius": r}
+    elif args.radius is not None:
+        raise MeshRepairError("--radius needs --look-at or --frame-hole/--frame-region")
+    if "look_at" in kw:
+        kw["clip"] = not args.no_clip
+    return kw
 
 
 # --------------------------------------------------------------------------------------------
@@ -138,11 +232,14 @@ def run_render(args: argparse.Namespace) -> int:
     t0 = time.perf_counter()
     mesh = load_mesh(args.input)
     kw = _color_options(args.color, mesh)
+    if "scalars" in kw:
+        kw["colorbar_label"] = Path(args.color).stem if args.color.endswith(".npy") else args.color
     if args.sharp_edges:
         kw["edge_mask"] = sharp_edges(mesh.V, mesh.F, args.sharp_threshold)
     w, h = args.size
+    kw.update(aim_options(args, mesh))
     img = render_mesh(
-        mesh.V, mesh.F, shading=args.shading, azimuth=args.azimuth, elevation=args.elevation,
+        mesh.V, mesh.F, shading=args.shading,
         width=w, height=h, title=args.title, supersample=args.supersample, **kw,
     )  # fmt: skip
     save_png(out, img)
@@ -162,10 +259,9 @@ def run_compare(args: argparse.Namespace) -> int:
         raise MeshRepairError(
             f"--titles has {len(args.titles)} entries for {len(inputs)} meshes; give one per mesh"
         )
-    if args.color not in ("curvature", "none"):
-        raise MeshRepairError("compare --color must be 'curvature' or 'none'")
     t0 = time.perf_counter()
     meshes = [load_mesh(p) for p in inputs]
+    color = _compare_colors(args.color, meshes, inputs)
     titles = args.titles if args.titles is not None else [Path(p).stem for p in inputs]
     metrics = None
     if args.reference is not None:
@@ -183,12 +279,39 @@ def run_compare(args: argparse.Namespace) -> int:
     w, h = args.size
     img = compare_figure(
         [(m.V, m.F) for m in meshes], titles, metrics=metrics, out_path=out,
-        color_by=args.color, shading=args.shading, azimuth=args.azimuth,
-        elevation=args.elevation, width=w, height=h, edge_mask=edge_masks,
-        supersample=args.supersample,
+        shading=args.shading, width=w, height=h, edge_mask=edge_masks,
+        supersample=args.supersample, **color, **aim_options(args, meshes[0]),
     )  # fmt: skip
     print(f"wrote {out} ({img.shape[1]}x{img.shape[0]}, {time.perf_counter() - t0:.2f} s)")
     return 0
+
+
+def _compare_colors(color: str, meshes: list[LoadedMesh], paths: list) -> dict:
+    """compare --color: curvature, none, a vertex attribute (NaN, drawn grey, on meshes without
+    it), one .npy for every mesh, or comma-separated .npy files, one per mesh."""
+    if color in ("curvature", "none"):
+        return {"color_by": color}
+    files = [c for c in color.split(",") if c]
+    if all(c.lower().endswith(".npy") for c in files) and files:
+        if len(files) not in (1, len(meshes)):
+            raise MeshRepairError(f"--color has {len(files)} .npy files for {len(meshes)} meshes;"
+                                  " give one for all or one per mesh")
+        files = files * len(meshes) if len(files) == 1 else files
+        scal = [_color_options(f, m)["scalars"] for f, m in zip(files, meshes, strict=True)]
+        return {"color_by": "scalars", "scalars": scal, "colorbar_label": Path(files[0]).stem}
+    have = [color in m.vertex_attributes for m in meshes]
+    if not any(have):
+        raise MeshRepairError(
+            f"--color {color!r} is not 'curvature', 'none', .npy file(s) or a vertex attribute of "
+            "any of the meshes")
+    scal = []
+    for m, ok, p in zip(meshes, have, paths, strict=True):
+        if ok:
+            scal.append(np.asarray(m.vertex_attributes[color], dtype=np.float64).ravel())
+        else:
+            print(f"note: {p} has no vertex attribute {color!r}; drawn grey")
+            scal.append(np.full(len(m.V), np.nan))
+    return {"color_by": "scalars", "scalars": scal, "colorbar_label": color}
 
 
 def register(subparsers) -> None:
@@ -218,8 +341,10 @@ def register(subparsers) -> None:
     c.add_argument("--titles", nargs="+", default=None, help="one title per mesh (default: stems)")
     c.add_argument("--reference", default=None, metavar="REF",
                    help="ground truth: show MSAE (deg²) and E_V under meshes with its vertex count")
-    c.add_argument("--color", default="curvature", choices=("curvature", "none"),
-                   help="colouring (default curvature)")
+    c.add_argument("--color", default="curvature", metavar="curvature|none|ATTR|A.npy[,B.npy]",
+                   help="'curvature' (default), 'none', a per-vertex attribute of the meshes "
+                   "(e.g. 'filled'; grey where a mesh lacks it), or .npy values: one file for "
+                   "all meshes or one per mesh, comma-separated")
     c.add_argument("--size", nargs=2, type=int, default=(600, 600), metavar=("W", "H"),
                    help="size of ONE panel in pixels (default 600 600)")
     _add_view_options(c)

@@ -23,7 +23,7 @@ _MASK_HINTS = ("m_v", "mask", "region", "hole", "inpaint")
 
 def _load_log(path: str | None) -> dict:
     """Read the optional run log: a JSON list (history) or a dict with optional keys
-    ``history``, ``parameters``, ``timings``, ``metrics``."""
+    ``history``, ``parameters``, ``timings``, ``metrics``, ``holes`` (per-hole records)."""
     if path is None:
         return {}
     p = Path(path)
@@ -41,9 +41,9 @@ def _load_log(path: str | None) -> dict:
             "'history', 'parameters', 'timings', 'metrics'"
         )
     out = {}
-    for key in ("history", "parameters", "timings", "metrics"):
+    for key in ("history", "parameters", "timings", "metrics", "holes"):
         if key in data:
-            want = list if key == "history" else dict
+            want = list if key in ("history", "holes") else dict
             if not isinstance(data[key], want):
                 raise MeshRepairError(f"'{key}' in {path!r} must be a JSON {want.__name__}")
             out[key] = data[key]
@@ -127,6 +127,8 @@ def run_report(args: argparse.Namespace) -> int:
         parameters=parameters,
         timings=timings,
         image_size=args.image_size,
+        holes=run.get("holes"),
+        output_attributes=res.vertex_attributes,
     )
     print(f"wrote {out} ({time.perf_counter() - t0:.2f} s)")
     return 0
