@@ -175,7 +175,12 @@ def register(subparsers) -> None:
         "worker process: a local cluster by default, a running Dask scheduler with "
         "--scheduler. OUT mirrors IN's layout and gets batch.jsonl (one record per mesh) and "
         "index.html (thumbnails, status, metrics; failures first). A bad mesh is recorded "
-        "and never stops the batch; exit status 1 if any mesh failed. See docs/batch.md.")
+        "and never stops the batch; exit status 1 if any mesh failed. See docs/batch.md.",
+        epilog="Task options mean what they mean for the single command; an option two tasks "
+        "share (--th, --denoise, --initial, --no-refine, --region) is listed once, under the "
+        "first; --region is a vertex mask for inpaint and the faces to replace for complete, as "
+        "in the single commands. File options may use {stem}, {name}, {parent} or {path} of "
+        "each input, e.g. --region '{parent}/{stem}.mask.npy'.")
     p.add_argument("input", metavar="IN",
                    help="folder (searched recursively), quoted glob ('scans/**/*.ply') or a "
                    "text file listing mesh paths")
