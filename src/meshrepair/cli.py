@@ -12,7 +12,7 @@ from . import __version__
 from .errors import MeshRepairError
 
 # sub-command modules in src/meshrepair/commands/, each with register(subparsers)
-COMMANDS = ("denoise", "fill", "complete", "render", "report", "view")
+COMMANDS = ("denoise", "fill", "complete", "render", "report", "view", "batch")
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -66,20 +66,66 @@ def _selection(path: str, V: np.ndarray, F: np.ndarray) -> dict:
     return {"region": read_face_selection(path, len(F))}
 
 
+def complete_arguments(mesh, tmesh, options: dict) -> tuple:
+    """``(template, kw)`` for :func:`meshrepair.complete` from the read meshes (``tmesh`` None
+    with ``mirror``) and :func:`complete_options`' values (selection files are read here)."""
+    from ..complete import extract_patch
+
+    kw = dict(options)
+    region, hole, template_region = kw.pop("region"), kw.pop("hole"), kw.pop("template_region")
+    mirror = bool(kw.pop("mirror", False))
+    if mirror:
+        if template_region is not None or kw.get("transform") is not None:
+            raise MeshRepairError("--mirror finds the template itself: drop --template-region "
+                                  "and --transform")
+        template = "mirror"
+    elif tmesh is None:
+        raise MeshRepairError("complete needs a template mesh (or --mirror)")
+    elif template_region is not None:
+        sel = _selection(template_region, tmesh.V, tmesh.F)
+        if "region" in sel:
+            faces = sel["region"]
+        else:
+            faces = np.flatnonzero(sel["region_vertices"][tmesh.F].all(axis=1))
+            if faces.size == 0:
+                raise MeshRepairError("--template-region selects no face of the template")
+        extract_patch(tmesh.V, tmesh.F, faces)  # a clear error for an empty/invalid selection
+        # a piece of a mesh: its context rings around the selection take part in the alignment
+        template = (tmesh.V, tmesh.F, faces)
+    else:
+        template = (tmesh.V, tmesh.F)
+    if region is not None:
+        kw.update(_selection(region, mesh.V, mesh.F))
+    elif hole is not None:
+        kw["hole"] = hole
+    else:
+        raise MeshRepairError("complete needs --region FILE or --hole K")
+    return template, kw
+
+
+def output_attributes(res, out: str | Path) -> dict | None:
+    """Per-vertex m_v, strip and template attributes written with a PLY output (else None)."""
+    if Path(out).suffix.lower() != ".ply":
+        return None
+    nV = len(res.V)
+    strip = np.zeros(nV, np.uint8)
+    strip[res.strip_vertices] = 1
+    tmpl = np.zeros(nV, np.uint8)
+    tmpl[res.template_vertices] = 1
+    return {"m_v": res.M_V.astype(np.float32), "strip": strip, "template": tmpl}
+
+
 def run_complete(args: argparse.Namespace) -> int:
     """Handler of ``meshrepair complete``; returns the exit code."""
-    from ..complete import complete, extract_patch
+    from ..complete import complete
     from ..io import read_mesh, write_mesh
-    from .common import run_outputs, write_json_log
+    from .common import ProgressBar, run_outputs, write_json_log
 
     paths = list(args.paths)
     if args.mirror:
         if len(paths) != 1:
             raise MeshRepairError("with --mirror give IN OUT only (the template is the mirrored "
                                   f"counterpart of the region), got {len(paths)} paths after IN")
-        if args.template_region is not None or args.transform is not None:
-            raise MeshRepairError("--mirror finds the template itself: drop --template-region "
-                                  "and --transform")
         args.template, args.output = None, paths[0]
     else:
         if len(paths) != 2:
@@ -92,44 +138,16 @@ def run_complete(args: argparse.Namespace) -> int:
     t0 = time.perf_counter()
     mesh = read_mesh(args.input)
     tmesh = read_mesh(args.template) if args.template is not None else None
-    if tmesh is None:
-        template = "mirror"
-    elif args.template_region is not None:
-        sel = _selection(args.template_region, tmesh.V, tmesh.F)
-        if "region" in sel:
-            faces = sel["region"]
-        else:
-            faces = np.flatnonzero(sel["region_vertices"][tmesh.F].all(axis=1))
-            if faces.size == 0:
-                raise MeshRepairError("--template-region selects no face of the template")
-        extract_patch(tmesh.V, tmesh.F, faces)  # a clear error for an empty/invalid selection
-        # a piece of a mesh: its context rings around the selection take part in the alignment
-        template = (tmesh.V, tmesh.F, faces)
-    else:
-        template = (tmesh.V, tmesh.F)
-    kw: dict = {}
-    if args.region is not None:
-        kw.update(_selection(args.region, mesh.V, mesh.F))
-    else:
-        kw["hole"] = args.hole
+    template, kw = complete_arguments(mesh, tmesh, complete_options(args))
     t_read = time.perf_counter() - t0
-    from .common import ProgressBar
-
     bar = ProgressBar(args.iterations, "blend", enabled=not args.quiet)
     try:
-        res = _run(complete, mesh, template, args, kw, bar)
+        res = complete(mesh.V, mesh.F, template=template, callback=bar, **kw)
     finally:
         bar.close()
     t_solve = time.perf_counter() - t0 - t_read
-    attrs = None
-    if out.suffix.lower() == ".ply":
-        nV = len(res.V)
-        strip = np.zeros(nV, np.uint8)
-        strip[res.strip_vertices] = 1
-        tmpl = np.zeros(nV, np.uint8)
-        tmpl[res.template_vertices] = 1
-        attrs = {"m_v": res.M_V.astype(np.float32), "strip": strip, "template": tmpl}
-    write_mesh(out, res.V, res.F, vertex_attributes=attrs, overwrite=args.force)
+    write_mesh(out, res.V, res.F, vertex_attributes=output_attributes(res, out),
+               overwrite=args.force)
     c = res.correspondence
     if log_path is not None:
         corr = {k: (v.tolist() if isinstance(v, np.ndarray) else v) for k, v in c.items()}
@@ -172,14 +190,6 @@ def run_complete(args: argparse.Namespace) -> int:
     return 0
 
 
-def _run(complete, mesh, template, args, kw, bar):
-    return complete(mesh.V, mesh.F, template=template, transform=args.transform,
-                    strip_rings=args.strip_rings, mode=args.mode, allow_scale=args.allow_scale,
-                    orientation=args.orientation, icp=args.icp, iterations=args.iterations,
-                    th=args.th, denoise=args.denoise,
-                    max_symmetry_residual=args.max_symmetry_residual, callback=bar, **kw)
-
-
 def _jsonable(d):
     if d is None:
         return None
@@ -203,27 +213,11 @@ def alignment_summary(res) -> str:
     return line
 
 
-def register(subparsers) -> None:
-    """Add the ``complete`` sub-command to an argparse ``subparsers`` object."""
+def add_complete_options(p, *, required: bool = True) -> None:
+    """The completion options of ``meshrepair complete`` (shared with ``meshrepair batch``)."""
     from ..complete import ICP_MODES, MODES, ORIENTATIONS
 
-    p = subparsers.add_parser(
-        "complete",
-        help="replace a region (or fill a hole) with a template patch and blend the seam",
-        usage="meshrepair complete IN [TEMPLATE] OUT (--region FILE | --hole K) [--mirror] "
-        "[options]",
-        description="Context-aware completion: remove the region of IN given by --region (or "
-        "use the existing hole --hole K), align TEMPLATE (a mesh with exactly one boundary "
-        "loop) to it, stitch it in and blend the seam strip with the variational model. With "
-        "--mirror (IN OUT only) the template is the region's mirrored counterpart across the "
-        "mesh's symmetry plane.",
-    )
-    p.add_argument("input", help="mesh to complete (PLY, OBJ, OFF, STL)")
-    p.add_argument("paths", nargs="+", metavar="[TEMPLATE] OUT",
-                   help="TEMPLATE: a template patch (a mesh file with one boundary loop; "
-                   "omitted with --mirror); OUT: mesh file to write (PLY also stores m_v, "
-                   "strip, template)")
-    g = p.add_mutually_exclusive_group(required=True)
+    g = p.add_mutually_exclusive_group(required=required)
     g.add_argument("--region", metavar="FILE",
                    help="faces to replace: a text file of face indices, or a .ply/.npy "
                    "per-vertex mask (the faces with all three vertices selected)")
@@ -260,6 +254,37 @@ def register(subparsers) -> None:
                    help="dihedral threshold of the adaptive M_E (default 30)")
     p.add_argument("--denoise", action="store_true",
                    help="solve on the whole mesh with the denoising schedule")
+
+
+def complete_options(args: argparse.Namespace) -> dict:
+    """``region``, ``hole``, ``template_region``, ``mirror`` and the keyword arguments of
+    :func:`meshrepair.complete` from the parsed options (see :func:`complete_arguments`)."""
+    return dict(region=args.region, hole=args.hole, template_region=args.template_region,
+                mirror=args.mirror, transform=args.transform, strip_rings=args.strip_rings,
+                mode=args.mode, allow_scale=args.allow_scale, orientation=args.orientation,
+                icp=args.icp, iterations=args.iterations, th=args.th, denoise=args.denoise,
+                max_symmetry_residual=args.max_symmetry_residual)
+
+
+def register(subparsers) -> None:
+    """Add the ``complete`` sub-command to an argparse ``subparsers`` object."""
+    p = subparsers.add_parser(
+        "complete",
+        help="replace a region (or fill a hole) with a template patch and blend the seam",
+        usage="meshrepair complete IN [TEMPLATE] OUT (--region FILE | --hole K) [--mirror] "
+        "[options]",
+        description="Context-aware completion: remove the region of IN given by --region (or "
+        "use the existing hole --hole K), align TEMPLATE (a mesh with exactly one boundary "
+        "loop) to it, stitch it in and blend the seam strip with the variational model. With "
+        "--mirror (IN OUT only) the template is the region's mirrored counterpart across the "
+        "mesh's symmetry plane.",
+    )
+    p.add_argument("input", help="mesh to complete (PLY, OBJ, OFF, STL)")
+    p.add_argument("paths", nargs="+", metavar="[TEMPLATE] OUT",
+                   help="TEMPLATE: a template patch (a mesh file with one boundary loop; "
+                   "omitted with --mirror); OUT: mesh file to write (PLY also stores m_v, "
+                   "strip, template)")
+    add_complete_options(p)
     p.add_argument("--log", metavar="RUN.json", default=None,
                    help="write history, parameters, timings and correspondence as JSON "
                    "(readable by 'meshrepair report --log')")

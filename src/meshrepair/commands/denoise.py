@@ -47,9 +47,7 @@ def run_denoise(args: argparse.Namespace) -> int:
 
     t0 = time.perf_counter()
     try:
-        r = denoise(m.V, m.F, lam=args.lam, th=args.th, robust_iters=args.robust_iters,
-                    feature_iters=args.feature_iters, inner_solver=args.inner_solver,
-                    n_solver=args.n_solver, tol=args.tol, callback=cb)
+        r = denoise(m.V, m.F, **denoise_options(args, output=False), callback=cb)
     except StopRequested:  # pragma: no cover - denoise returns on StopRequested
         raise
     finally:
@@ -172,14 +170,8 @@ def run_demo(args: argparse.Namespace) -> int:
     return 0
 
 
-def register(subparsers) -> None:
-    p = subparsers.add_parser(
-        "denoise", help="feature-aware denoising (keeps sharp creases)",
-        description="Denoise a triangle mesh with the MC/edge-Willmore model and ADMM. Defaults "
-                    "need no tuning: the noise level is estimated and every parameter is relative "
-                    "to the mean edge length. Vertex order and faces are kept.")
-    p.add_argument("input", help="noisy mesh (.ply .obj .off .stl)")
-    p.add_argument("output", help="result mesh (.ply recommended); never the input file")
+def add_denoise_options(p) -> None:
+    """The denoising options, shared by ``meshrepair denoise`` and ``meshrepair batch``."""
     p.add_argument("--lam", type=float, default=None,
                    help="fidelity weight lambda (default: from the estimated noise level)")
     p.add_argument("--th", type=float, default=30.0, metavar="DEG",
@@ -197,6 +189,28 @@ def register(subparsers) -> None:
                    help="N-subproblem (25) solver: block PCG, sparse direct, or chosen by size")
     p.add_argument("--save-mask", action="store_true",
                    help="store a per-vertex 'sharp' attribute (vertices on sharp edges) in the PLY")
+
+
+def denoise_options(args: argparse.Namespace, *, output: bool = True) -> dict:
+    """Keyword arguments of :func:`meshrepair.denoise` from the parsed options (plus
+    ``save_mask``, an output option, when ``output``)."""
+    kw = dict(lam=args.lam, th=args.th, robust_iters=args.robust_iters,
+              feature_iters=args.feature_iters, inner_solver=args.inner_solver,
+              n_solver=args.n_solver, tol=args.tol)
+    if output:
+        kw["save_mask"] = bool(args.save_mask)
+    return kw
+
+
+def register(subparsers) -> None:
+    p = subparsers.add_parser(
+        "denoise", help="feature-aware denoising (keeps sharp creases)",
+        description="Denoise a triangle mesh with the MC/edge-Willmore model and ADMM. Defaults "
+                    "need no tuning: the noise level is estimated and every parameter is relative "
+                    "to the mean edge length. Vertex order and faces are kept.")
+    p.add_argument("input", help="noisy mesh (.ply .obj .off .stl)")
+    p.add_argument("output", help="result mesh (.ply recommended); never the input file")
+    add_denoise_options(p)
     p.add_argument("--log", metavar="RUN.json",
                    help="write the iteration history and parameters as JSON")
     p.add_argument("--report", metavar="OUT.html", help="write a self-contained HTML report")

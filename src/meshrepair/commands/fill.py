@@ -97,30 +97,21 @@ def run_fill(args: argparse.Namespace) -> int:
                   f"{', pinched' if h.pinched else ''}")
         return 0
     return _solve_and_write(args, m, paths, "fill", lambda cb, hp: fill_holes(
-        m.V, m.F, max_hole_size=args.max_hole_size, keep_border=args.keep_border,
-        exclude=args.exclude or (), holes=args.holes, denoise=args.denoise,
-        initial=args.initial, refine=not args.no_refine, callback=cb, progress=hp))
+        m.V, m.F, **fill_options(args), callback=cb, progress=hp))
 
 
 def run_inpaint(args: argparse.Namespace) -> int:
     """Handler of ``meshrepair inpaint``; returns the exit code."""
     from ..fill import inpaint
-    from ..io import read_mesh, read_vertex_mask
+    from ..io import read_mesh
     from .common import run_outputs
 
     paths = run_outputs(args, [args.input, args.region], output=args.output)
     m = read_mesh(args.input)
-    if args.region is not None:
-        region = read_vertex_mask(args.region, len(m.V), attribute=args.attribute)
-    elif args.sphere is not None:
-        x, y, z, r = _floats(args.sphere, 4, "--sphere")
-        region = ("sphere", (x, y, z), r)
-    else:
-        x0, y0, z0, x1, y1, z1 = _floats(args.box, 6, "--box")
-        region = ("box", (x0, y0, z0), (x1, y1, z1))
+    opts = inpaint_options(args)
+    region = resolve_region(opts.pop("region"), opts.pop("attribute"), len(m.V))
     return _solve_and_write(args, m, paths, "inpaint", lambda cb, hp: inpaint(
-        m.V, m.F, region, denoise=args.denoise, initial=args.initial,
-        refine=not args.no_refine, callback=cb, progress=hp))
+        m.V, m.F, region, **opts, callback=cb, progress=hp))
 
 
 def _solve_and_write(args: argparse.Namespace, m, paths: tuple, desc: str, solve) -> int:
@@ -177,7 +168,8 @@ class _HoleBar:
             self.bar = None
 
 
-def _common(p: argparse.ArgumentParser) -> None:
+def add_solve_options(p) -> None:
+    """The patch options shared by fill and inpaint (and ``meshrepair batch``)."""
     p.add_argument("--denoise", action="store_true",
                    help="also denoise the rest of the mesh in the same solve (default: only the "
                    "new vertices move)")
@@ -185,6 +177,73 @@ def _common(p: argparse.ArgumentParser) -> None:
                    help="initial patch: curved thin-plate fairing (default) or flat membrane")
     p.add_argument("--no-refine", action="store_true",
                    help="skip the ADMM solve (keep the initial patch; ignored with --denoise)")
+
+
+def _solve_options(args: argparse.Namespace) -> dict:
+    return dict(denoise=args.denoise, initial=args.initial, refine=not args.no_refine)
+
+
+def add_fill_options(p) -> None:
+    """The hole-selection options of ``meshrepair fill`` (shared with ``meshrepair batch``)."""
+    p.add_argument("--max-hole-size", type=int, default=None, metavar="N",
+                   help="fill only holes with at most N boundary edges")
+    p.add_argument("--keep-border", action="store_true",
+                   help="leave the longest loop open (the border of a scan or an open model)")
+    p.add_argument("--exclude", type=int, nargs="+", default=None, metavar="I",
+                   help="hole indices to leave open")
+    p.add_argument("--holes", type=int, nargs="+", default=None, metavar="I",
+                   help="fill only these hole indices")
+
+
+def fill_options(args: argparse.Namespace) -> dict:
+    """Keyword arguments of :func:`meshrepair.fill_holes` from the parsed options."""
+    return dict(max_hole_size=args.max_hole_size, keep_border=args.keep_border,
+                exclude=args.exclude or (), holes=args.holes, **_solve_options(args))
+
+
+def add_inpaint_options(p, *, required: bool = True) -> None:
+    """The region options of ``meshrepair inpaint`` (shared with ``meshrepair batch``)."""
+    g = p.add_mutually_exclusive_group(required=required)
+    g.add_argument("--region", metavar="FILE",
+                   help="vertex mask: PLY vertex property, .npy, or a text file of indices")
+    g.add_argument("--sphere", metavar="X,Y,Z,R", help="vertices within distance R of (X,Y,Z)")
+    g.add_argument("--box", metavar="X0,Y0,Z0,X1,Y1,Z1", help="vertices inside the box")
+    p.add_argument("--attribute", default=None,
+                   help="PLY vertex property holding the mask (with --region FILE.ply)")
+
+
+def inpaint_options(args: argparse.Namespace) -> dict:
+    """``region`` (a mask file, or ``["sphere", [x, y, z], r]`` / ``["box", lo, hi]``),
+    ``attribute`` and the keyword arguments of :func:`meshrepair.inpaint`."""
+    if args.region is not None:
+        region = args.region
+    elif args.sphere is not None:
+        x, y, z, r = _floats(args.sphere, 4, "--sphere")
+        region = ["sphere", [x, y, z], r]
+    elif args.box is not None:
+        x0, y0, z0, x1, y1, z1 = _floats(args.box, 6, "--box")
+        region = ["box", [x0, y0, z0], [x1, y1, z1]]
+    else:
+        region = None
+    return dict(region=region, attribute=args.attribute, **_solve_options(args))
+
+
+def resolve_region(region, attribute: str | None, n_vertices: int):
+    """The ``region`` argument of :func:`meshrepair.inpaint` from :func:`inpaint_options`'s
+    ``region``: a mask file read with :func:`meshrepair.io.read_vertex_mask`, or a sphere/box
+    tuple."""
+    from ..io import read_vertex_mask
+
+    if region is None:
+        raise MeshRepairError("inpaint needs a region: --region FILE, --sphere or --box")
+    if isinstance(region, (str, Path)):
+        return read_vertex_mask(region, n_vertices, attribute=attribute)
+    kind, a, b = region
+    return (kind, tuple(a), b if kind == "sphere" else tuple(b))
+
+
+def _common(p: argparse.ArgumentParser) -> None:
+    add_solve_options(p)
     p.add_argument("--force", action="store_true", help="overwrite OUT if it exists")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
     from .common import add_report_option
@@ -207,14 +266,7 @@ def register(subparsers) -> None:
     p.add_argument("output", nargs="?", default=None,
                    help="mesh file to write (PLY gets a 'filled' vertex property)")
     p.add_argument("--list", action="store_true", help="only list the holes and exit")
-    p.add_argument("--max-hole-size", type=int, default=None, metavar="N",
-                   help="fill only holes with at most N boundary edges")
-    p.add_argument("--keep-border", action="store_true",
-                   help="leave the longest loop open (the border of a scan or an open model)")
-    p.add_argument("--exclude", type=int, nargs="+", default=None, metavar="I",
-                   help="hole indices to leave open")
-    p.add_argument("--holes", type=int, nargs="+", default=None, metavar="I",
-                   help="fill only these hole indices")
+    add_fill_options(p)
     _common(p)
     p.set_defaults(func=run_fill)
 
@@ -226,12 +278,6 @@ def register(subparsers) -> None:
     )
     q.add_argument("input", help="mesh file")
     q.add_argument("output", help="mesh file to write (PLY gets a 'filled' vertex property)")
-    g = q.add_mutually_exclusive_group(required=True)
-    g.add_argument("--region", metavar="FILE",
-                   help="vertex mask: PLY vertex property, .npy, or a text file of indices")
-    g.add_argument("--sphere", metavar="X,Y,Z,R", help="vertices within distance R of (X,Y,Z)")
-    g.add_argument("--box", metavar="X0,Y0,Z0,X1,Y1,Z1", help="vertices inside the box")
-    q.add_argument("--attribute", default=None,
-                   help="PLY vertex property holding the mask (with --region FILE.ply)")
+    add_inpaint_options(q)
     _common(q)
     q.set_defaults(func=run_inpaint)
