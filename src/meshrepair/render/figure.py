@@ -44,17 +44,16 @@ def _add_colorbar(fig, rect_px, total_w, total_h, vmin, vmax, cmap, label, fs_pt
                             cmap=ListedColormap(colours))
         cb = fig.colorbar(sm, cax=cax, ticks=np.arange(k))
         cb.ax.set_yticklabels([f"{c:g}" for c in cats])
-        cb.ax.tick_params(labelsize=fs_pt * 0.85, length=0)
-        if label:
-            cb.set_label(label, fontsize=fs_pt * 0.85)
-        cb.outline.set_linewidth(0.6)
-        return
-    sm = ScalarMappable(norm=Normalize(vmin=vmin, vmax=vmax), cmap=matplotlib.colormaps[cmap])
-    cb = fig.colorbar(sm, cax=cax)
-    cb.locator = MaxNLocator(nbins=5)
-    cb.formatter = matplotlib.ticker.FormatStrFormatter("%.3g")
-    cb.update_ticks()
-    cb.ax.tick_params(labelsize=fs_pt * 0.85, length=3)
+        tick_length = 0
+    else:
+        sm = ScalarMappable(norm=Normalize(vmin=vmin, vmax=vmax),
+                            cmap=matplotlib.colormaps[cmap])
+        cb = fig.colorbar(sm, cax=cax)
+        cb.locator = MaxNLocator(nbins=5)
+        cb.formatter = matplotlib.ticker.FormatStrFormatter("%.3g")
+        cb.update_ticks()
+        tick_length = 3
+    cb.ax.tick_params(labelsize=fs_pt * 0.85, length=tick_length)
     if label:
         cb.set_label(label, fontsize=fs_pt * 0.85)
     cb.outline.set_linewidth(0.6)
