@@ -1,0 +1,256 @@
+"""PLY reading and writing.
+
+PLY is read with :mod:`plyfile` (ASCII and binary, any byte order; a fast memory-mapped path for
+triangle meshes, the generic path for polygons); extra per-vertex scalar properties (e.g. a mask,
+colours, quality) are returned in :attr:`MeshData.vertex_attributes`. The header's element
+counts must account for all the data: a header that overcounts (more records than the file can
+hold) or undercounts (data after the last declared record) is refused.
+
+Written as binary little-endian PLY (or ASCII), ``double x, y, z``, one property per vertex
+attribute (its dtype kept), faces as ``uchar`` count + ``int`` indices, directly with numpy
+(plyfile serialises list elements record by record).
+"""
+
+from __future__ import annotations
+
+import logging
+from collections.abc import Mapping
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ..errors import MeshRepairError
+from .common import MeshData, _Bad, _check_indices, _fan_triangulate, _undercount
+
+logger = logging.getLogger("meshrepair.io")
+
+_PLY_FACE_NAMES = ("vertex_indices", "vertex_index")
+_PLY_TYPES = {
+    np.dtype(np.int8): "char", np.dtype(np.uint8): "uchar",
+    np.dtype(np.int16): "short", np.dtype(np.uint16): "ushort",
+    np.dtype(np.int32): "int", np.dtype(np.uint32): "uint",
+    np.dtype(np.float32): "float", np.dtype(np.float64): "double",
+}
+
+
+def _load_ply(path: Path) -> Any:
+    """Parse a PLY file with plyfile (fast memory-mapped path for triangle meshes) and check
+    that the header's element counts account for all the data (no silently ignored rest)."""
+    import plyfile
+
+    with open(path, "rb") as fh:
+        magic = fh.read(4)
+    if magic[:3] != b"ply":
+        raise _Bad("not a PLY file (bad header: missing 'ply' magic line)")
+    _check_ply_counts(path)
+    known = {"face": dict.fromkeys(_PLY_FACE_NAMES, 3)}
+    try:
+        try:
+            with open(path, "rb") as fh:
+                ply = plyfile.PlyData.read(fh, mmap="c", known_list_len=known)
+                end = None if ply.text else fh.tell()
+        except plyfile.PlyElementParseError as exc:
+            if exc.message != "unexpected list length":
+                raise
+            with open(path, "rb") as fh:  # polygons: slow generic path
+                ply = plyfile.PlyData.read(fh, mmap=False)
+                end = None if ply.text else fh.tell()
+    except plyfile.PlyHeaderParseError as exc:
+        raise _Bad(f"not a PLY file (bad header: {exc})") from None
+    except plyfile.PlyElementParseError as exc:
+        raise _Bad(f"truncated or corrupt PLY data ({exc})") from None
+    except (ValueError, TypeError, IndexError, KeyError, EOFError, OSError) as exc:
+        raise _Bad(f"corrupt PLY file ({type(exc).__name__}: {exc})") from None
+    _check_ply_extent(path, ply, end)
+    return ply
+
+
+def _check_ply_counts(path: Path) -> None:
+    """Refuse, before any allocation, a header whose element counts cannot fit in the file
+    (each record takes at least 1 byte in binary, 2 in ASCII: a value and a line end)."""
+    with open(path, "rb") as fh:
+        head = fh.read(1 << 16)
+    end = head.find(b"end_header")
+    if end < 0:
+        return  # plyfile reports the bad header
+    counts, ascii_ = [], False
+    for line in head[:end].decode("ascii", "replace").splitlines():
+        t = line.split()
+        if len(t) >= 2 and t[0] == "format":
+            ascii_ = t[1] == "ascii"
+        elif len(t) == 3 and t[0] == "element" and t[2].isdigit():
+            counts.append((t[1], int(t[2])))
+    need = sum(c for _, c in counts) * (2 if ascii_ else 1)
+    size = path.stat().st_size - end
+    if need > size:
+        desc = ", ".join(f"{c:,} {n}" for n, c in counts)
+        raise _Bad(f"the header declares {desc} records, which need at least {need:,} bytes, "
+                   f"but the file has {size:,} bytes of data (corrupt header or truncated file)")
+
+
+def _ply_counts(ply: Any) -> str:
+    return ", ".join(f"{e.count} {e.name}" for e in ply.elements)
+
+
+def _check_ply_extent(path: Path, ply: Any, end: int | None) -> None:
+    """Refuse data after the last element the header declares (a header that undercounts)."""
+    size = path.stat().st_size
+    if end is not None:  # binary: the parser stopped at byte ``end``
+        if size > end:
+            with open(path, "rb") as fh:
+                fh.seek(end)
+                tail = fh.read(min(size - end, 1 << 16))
+            if size - end > len(tail) or tail.strip(b" \t\r\n"):
+                raise _undercount(f"the header declares {_ply_counts(ply)} records but "
+                                  f"{size - end} more bytes follow them")
+        return
+    data = path.read_bytes()  # ASCII: one line per element record after 'end_header'
+    h = data.find(b"end_header")
+    start = data.find(b"\n", h) + 1 if h >= 0 else 0
+    if start <= 0:
+        return
+    n_rec = sum(int(e.count) for e in ply.elements)
+    nl = np.flatnonzero(np.frombuffer(data, np.uint8, offset=start) == 10)
+    if n_rec == 0:
+        rest = data[start:]
+    elif len(nl) < n_rec:  # the last record has no newline
+        rest = b""
+    else:
+        rest = data[start + int(nl[n_rec - 1]) + 1:]
+    if rest.strip():
+        extra = len([ln for ln in rest.splitlines() if ln.strip()])
+        raise _undercount(f"the header declares {_ply_counts(ply)} records but {extra} more "
+                          "data lines follow them")
+
+
+def _ply_scalar_props(element: Any) -> list[Any]:
+    import plyfile
+
+    return [p for p in element.properties if not isinstance(p, plyfile.PlyListProperty)]
+
+
+def _read_ply(path: Path) -> MeshData:
+    import plyfile
+
+    ply = _load_ply(path)
+    names = [e.name for e in ply.elements]
+    if "vertex" not in names:
+        raise _Bad(f"no 'vertex' element (elements: {names})")
+    vert = ply["vertex"]
+    props = [p.name for p in vert.properties]
+    missing = [c for c in "xyz" if c not in props]
+    if missing:
+        raise _Bad(f"vertex element lacks properties {missing} (has {props})")
+    data = vert.data
+    V = np.empty((vert.count, 3), dtype=np.float64)
+    for k, c in enumerate("xyz"):
+        V[:, k] = data[c]
+    attrs: dict[str, np.ndarray] = {}
+    for p in _ply_scalar_props(vert):
+        if p.name not in ("x", "y", "z"):
+            col = data[p.name]
+            attrs[p.name] = np.array(col, dtype=col.dtype.newbyteorder("="))
+    skipped = [p.name for p in vert.properties
+               if isinstance(p, plyfile.PlyListProperty)]
+    if skipped:
+        logger.info("%s: ignoring per-vertex list properties %s", path, skipped)
+
+    if "face" not in names:
+        if "tristrips" in names:
+            raise _Bad("faces stored as 'tristrips' are not supported; convert to triangles")
+        logger.warning("%s: no 'face' element: the file holds a point cloud (0 faces)", path)
+        F = np.empty((0, 3), dtype=np.int64)
+    else:
+        face = ply["face"]
+        lists = [p.name for p in face.properties if isinstance(p, plyfile.PlyListProperty)]
+        key = next((n for n in _PLY_FACE_NAMES if n in lists), lists[0] if lists else None)
+        if key is None:
+            raise _Bad("the 'face' element has no list property of vertex indices")
+        col = face.data[key]
+        if col.dtype != object and col.ndim == 2:  # fixed-length (memory-mapped) triangles
+            counts = np.full(len(col), col.shape[1], dtype=np.int64)
+            flat = np.asarray(col, dtype=np.int64).ravel()
+        else:
+            counts = np.fromiter((len(a) for a in col), dtype=np.int64, count=len(col))
+            flat = (np.concatenate([np.asarray(a, dtype=np.int64) for a in col])
+                    if len(col) else np.empty(0, dtype=np.int64))
+        F = _fan_triangulate(flat, counts, str(path))
+    del ply, data
+    _check_indices(F, len(V))
+    return MeshData(V=V, F=F, vertex_attributes=attrs, path=path)
+
+
+def _ply_attr_columns(
+    vertex_attributes: Mapping[str, Any] | None, nV: int
+) -> list[tuple[str, np.ndarray, str]]:
+    """Validate attributes for PLY output: (name, array, ply type) triples."""
+    out: list[tuple[str, np.ndarray, str]] = []
+    for name, values in (vertex_attributes or {}).items():
+        if not isinstance(name, str) or not name or any(ch.isspace() for ch in name) \
+                or name in ("x", "y", "z"):
+            raise MeshRepairError(
+                f"invalid vertex attribute name {name!r}: use a non-empty name without spaces, "
+                "other than x, y, z"
+            )
+        a = np.asarray(values)
+        if a.ndim == 2 and a.shape[1] == 1:
+            a = a[:, 0]
+        if a.shape != (nV,):
+            raise MeshRepairError(
+                f"vertex attribute {name!r} has shape {a.shape}, expected ({nV},) "
+                "(one scalar per vertex)"
+            )
+        if a.dtype == bool:
+            a = a.astype(np.uint8)
+        elif a.dtype == np.float16:
+            a = a.astype(np.float32)
+        elif a.dtype in (np.dtype(np.int64), np.dtype(np.uint64)):
+            target = np.int32 if a.dtype == np.int64 else np.uint32
+            info = np.iinfo(target)
+            if a.size and (a.min() < info.min or a.max() > info.max):
+                raise MeshRepairError(
+                    f"vertex attribute {name!r} has values outside the 32-bit range of PLY "
+                    "integers; convert it to float64"
+                )
+            a = a.astype(target)
+        a = a.astype(a.dtype.newbyteorder("="), copy=False)
+        if a.dtype not in _PLY_TYPES:
+            raise MeshRepairError(
+                f"vertex attribute {name!r} has dtype {a.dtype}, which PLY cannot store "
+                "(use a float or integer array)"
+            )
+        out.append((name, a, _PLY_TYPES[a.dtype]))
+    return out
+
+
+def _write_ply(fh: Any, V: np.ndarray, F: np.ndarray, attrs: list[tuple[str, np.ndarray, str]],
+               binary: bool) -> None:
+    # Written directly (not via plyfile, which serialises list elements record by record);
+    # the layout is the standard one and is read back by plyfile.
+    fmt = "binary_little_endian" if binary else "ascii"
+    header = ["ply", f"format {fmt} 1.0", f"element vertex {len(V)}",
+              "property double x", "property double y", "property double z"]
+    header += [f"property {t} {n}" for n, _, t in attrs]
+    header += [f"element face {len(F)}", "property list uchar int vertex_indices", "end_header"]
+    fh.write(("\n".join(header) + "\n").encode("ascii"))
+    vdtype = [("x", "<f8"), ("y", "<f8"), ("z", "<f8")]
+    vdtype += [(n, a.dtype.newbyteorder("<").str) for n, a, _ in attrs]
+    vrec = np.empty(len(V), dtype=vdtype)
+    vrec["x"], vrec["y"], vrec["z"] = V[:, 0], V[:, 1], V[:, 2]
+    for n, a, _ in attrs:
+        vrec[n] = a
+    frec = np.empty(len(F), dtype=[("n", "u1"), ("i", "<i4", (3,))])
+    frec["n"] = 3
+    frec["i"] = F
+    if binary:
+        fh.write(vrec.tobytes())
+        fh.write(frec.tobytes())
+        return
+    fmts = ["%.17g"] * 3 + ["%.9g" if a.dtype == np.float32 else "%.17g"
+                            if a.dtype.kind == "f" else "%d" for _, a, _ in attrs]
+    if len(V):
+        np.savetxt(fh, vrec, fmt=fmts, delimiter=" ")
+    if len(F):
+        np.savetxt(fh, np.c_[np.full(len(F), 3), F], fmt="%d", delimiter=" ")
+
