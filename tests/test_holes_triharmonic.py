@@ -23,7 +23,8 @@ def _grid(n: int = 21):
     x, y = np.meshgrid(np.linspace(-1, 1, n), np.linspace(-1, 1, n))
     V = np.c_[x.ravel(), y.ravel(), np.zeros(n * n)]
     idx = np.arange(n * n).reshape(n, n)
-    a, b, c, d = idx[:-1, :-1].ravel(), idx[:-1, 1:].ravel(), idx[1:, :-1].ravel(), idx[1:, 1:].ravel()
+    a, b = idx[:-1, :-1].ravel(), idx[:-1, 1:].ravel()
+    c, d = idx[1:, :-1].ravel(), idx[1:, 1:].ravel()
     F = np.r_[np.c_[a, b, d], np.c_[a, d, c]].astype(np.int64)
     return V, F
 
