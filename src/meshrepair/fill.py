@@ -13,7 +13,10 @@ Pipeline of :func:`fill_holes`:
    own surface) before it is refused.
 3. *Initial position* (``initial``): ``"bilaplacian"`` (default) moves the new vertices to the
    bi-Laplacian (thin-plate) fairing with the surrounding 1-ring as Dirichlet data, which continues
-   the surrounding curvature into the hole; ``"harmonic"`` keeps the flat membrane.
+   the surrounding curvature into the hole; ``"harmonic"`` keeps the flat membrane. With
+   ``triharmonic=True`` (default) the screened triharmonic fairing (two rings of the surround as
+   data, curvature continuity; :mod:`meshrepair.holes.triharmonic`) is computed too and kept for
+   each hole whose seam angle it lowers.
 4. *Repair solve* with the shared :class:`~meshrepair.solver.ADMMSolver`: ``M_V = 0`` on the new
    vertices, ``M_E`` forced to 0 (edge-Willmore) on every edge of a new face (the patch interior
    and the loop itself, so the patch joins its surround smoothly), the dihedral-threshold mask
@@ -372,12 +375,12 @@ def _fill_core(V: np.ndarray, F: np.ndarray, holes, skip: dict[int, str], *, den
                                       exclude_rows=np.union1d(on_crease, sharp_v))
                 Vt = _finite_rows(Vt, V1, np.arange(nV, len(V1)), "the triharmonic fairing")
                 V1 = V1.copy()
+                by_rep = {r.index: r for r in reports}
                 for i, (bv, bf) in _blocks(reports, nV, nF).items():
                     s_thin = _seam_angle(V1, F1, bf, nF)
                     s_tri = _seam_angle(Vt, F1, bf, nF)
                     if s_tri < s_thin:
                         V1[bv] = Vt[bv]
-                        by_rep = {r.index: r for r in reports}
                         by_rep[i].reason += ", triharmonic"
                         log.info("hole %d: triharmonic fairing kept (seam %.2f° vs thin plate "
                                  "%.2f°)", i, s_tri, s_thin)
