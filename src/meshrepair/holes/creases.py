@@ -101,6 +101,9 @@ class CreaseEnd:
     chain_length : float
         Length of the sharp chain walked back from the vertex (at most :data:`MAX_CHAIN`
         edges).
+    straight_length : float
+        How far back the chain stays on a straight line through the vertex (every chain vertex
+        within :data:`STRAIGHT_TOL` degrees of the first edge's direction).
     """
 
     pos: int
@@ -109,6 +112,7 @@ class CreaseEnd:
     angle: float
     convex: bool
     chain_length: float = np.inf
+    straight_length: float = np.inf
 
 
 @dataclass
@@ -243,9 +247,16 @@ def crease_ends(G: SharpGraph, loop: np.ndarray) -> list[CreaseEnd]:
                 if not moved:
                     break
             cl = float(np.linalg.norm(np.diff(V[np.asarray(chain_v)], axis=0), axis=1).sum())
+            rel = V[np.asarray(chain_v[1:])] - V[v]
+            dist = np.linalg.norm(rel, axis=1)
+            d0 = rel[0] / max(dist[0], 1e-300)
+            off = (rel @ d0) < np.cos(np.radians(STRAIGHT_TOL)) * dist
+            i_off = int(np.argmax(off)) if off.any() else len(dist)
+            sl = float(dist[i_off - 1]) if i_off > 0 else 0.0
             ends.append(CreaseEnd(pos=p_end, vertex=v_end, direction=d,
                                   angle=float(G.angle[ce].mean()),
-                                  convex=bool(np.mean(G.convex[ce]) >= 0.5), chain_length=cl))
+                                  convex=bool(np.mean(G.convex[ce]) >= 0.5), chain_length=cl,
+                                  straight_length=sl))
     return ends
 
 
@@ -271,6 +282,135 @@ def _corner_point(P: np.ndarray, D: np.ndarray, chain: np.ndarray) -> np.ndarray
     return c
 
 
+EXACT_CORNER_TOL = 0.05
+"""Two crease lines *meet* (for :func:`_exact_corner`) when their closest points are within this
+fraction of the distance along them."""
+
+EXACT_CORNER_ARM = 45.0
+"""Largest angle (degrees) between a further crease end's direction and the chord to an exact
+corner for it to join the corner as a curved arm."""
+
+
+def _arc_to(p: np.ndarray, d: np.ndarray, c: np.ndarray) -> np.ndarray:
+    """Hermite data of the cubic nearest the circular arc from ``p`` with tangent ``d`` to
+    ``c`` (straight when ``d`` points at ``c``)."""
+    s = c - p
+    L = float(np.linalg.norm(s))
+    sh = s / max(L, 1e-300)
+    half = float(np.arccos(np.clip(d @ sh, -1.0, 1.0)))  # half the turn of the arc
+    theta = 2 * half
+    m = L * (2 * np.tan(theta / 4) / np.sin(theta / 2) if theta > 1e-6 else 1.0)
+    d1 = 2 * float(d @ sh) * sh - d  # the tangent at c: d mirrored about the chord
+    return np.stack([p, m * d, c, m * d1])
+
+
+STRAIGHT_TOL = 2.0
+"""Degrees: a crease chain is straight as far as its vertices stay this close to the line of its
+first edge (:attr:`CreaseEnd.straight_length`)."""
+
+
+def _collinear_pair(P: np.ndarray, ea: CreaseEnd, eb: CreaseEnd, cos_par: float) -> bool:
+    """Two ends pointing at each other along one straight line (within :data:`CORNER_TOL`)."""
+    s = P[eb.pos] - P[ea.pos]
+    L = float(np.linalg.norm(s))
+    if not L > 0 or float(ea.direction @ eb.direction) > -cos_par:
+        return False
+    return float(np.linalg.norm(np.cross(s, ea.direction))) <= CORNER_TOL * L
+
+
+def _exact_corner(P: np.ndarray, ends: list[CreaseEnd]):
+    """A corner of three or more creases inside the hole, two of which arrive straight: two
+    non-parallel ends whose lines meet in front of both (closest points within
+    :data:`EXACT_CORNER_TOL` of the distance), and every other end whose direction points at
+    that point within :data:`EXACT_CORNER_ARM` (a curved crease reaching the corner, as on
+    fandisk). Returns (end indices, corner point) for the group with the most ends (then the
+    tightest meeting), or None when no group has three ends. Two tangent lines of one circular
+    crease also meet, which is why two ends alone never make a corner here."""
+    best = None
+    cos_par = np.cos(np.radians(PAIR_MAX_TURN))
+    cos_arm = np.cos(np.radians(EXACT_CORNER_ARM))
+    for a in range(len(ends)):
+        for b in range(a + 1, len(ends)):
+            ea, eb = ends[a], ends[b]
+            da, db = ea.direction, eb.direction
+            if ea.pos == eb.pos or abs(float(da @ db)) > cos_par:
+                continue
+            pa, pb = P[ea.pos], P[eb.pos]
+            w = pa - pb
+            A = np.array([[da @ da, -(da @ db)], [da @ db, -(db @ db)]])
+            try:
+                t, u = np.linalg.solve(A, [-(w @ da), -(w @ db)])
+            except np.linalg.LinAlgError:
+                continue
+            if not (t > 0 and u > 0):
+                continue
+            qa, qb = pa + t * da, pb + u * db
+            gap = float(np.linalg.norm(qa - qb))
+            if gap > EXACT_CORNER_TOL * min(t, u):
+                continue
+            if min(ea.chain_length / t, eb.chain_length / u) < CHAIN_PER_GAP:
+                continue
+            c = 0.5 * (qa + qb)
+            grp = [a, b]
+            spread = 0.0  # how far the further arms turn to reach c
+            for i, e in enumerate(ends):
+                if i in grp or e.pos in (ea.pos, eb.pos):
+                    continue
+                s = c - P[e.pos]
+                L = float(np.linalg.norm(s))
+                if L > 0 and float(e.direction @ s) > cos_arm * L and (
+                        e.chain_length >= CHAIN_PER_GAP * L):
+                    grp.append(i)
+                    spread += 1.0 - float(e.direction @ s) / L
+            if len(grp) < MIN_CORNER:
+                continue
+            if any(_collinear_pair(P, ends[i], ends[j], cos_par)
+                   for i in grp for j in grp if i < j):
+                continue  # a straight crease through the hole: a pair (T-junction), not here
+            log.debug("exact corner %s at %s: spread %.3f", grp, c, spread)
+            # the two lines that meet must be straight chains, reliable that far into the hole
+            # (fandisk: a curved crease's tangent line also meets a straight one near the
+            # corner); then the arms that turn least
+            reach = min(1.0, ea.straight_length / t, eb.straight_length / u)
+            key = (len(grp), round(reach, 1), -spread)
+            if best is None or key > best[0]:
+                best = (key, grp, c)
+    if best is None:
+        return None
+    return best[1], best[2]
+
+
+def _twin_corners(P: np.ndarray, ends: list[CreaseEnd]):
+    """Four leftover ends that meet two by two at two corners inside the hole (two corners of
+    a polyhedron, the crease joining them wholly inside): the split into two pairs whose lines
+    meet in front of both (:func:`_corner_point`) with the smallest spread, and the two corner
+    points; None when no split works. Both corners must be at least one loop edge apart and
+    no end's corner may lie behind the other corner (the pairs would cross)."""
+    best = None
+    le = float(np.linalg.norm(P - np.roll(P, -1, axis=0), axis=1).mean())
+    for a, b in (((0, 1), (2, 3)), ((0, 2), (1, 3)), ((0, 3), (1, 2))):
+        cs, cost = [], 0.0
+        for grp in (a, b):
+            es = [ends[i] for i in grp]
+            if es[0].convex != es[1].convex or abs(es[0].angle - es[1].angle) > PAIR_MAX_ANGLE_GAP:
+                break
+            D = np.array([e.direction for e in es])
+            if float(D[0] @ D[1]) > np.cos(np.radians(PAIR_MAX_TURN)):
+                break  # (nearly) parallel: not a corner
+            c = _corner_point(np.array([P[e.pos] for e in es]), D,
+                              np.array([e.chain_length for e in es]))
+            if c is None:
+                break
+            cs.append(c)
+            cost += sum(float(np.linalg.norm(c - P[e.pos])) for e in es)
+        else:
+            if float(np.linalg.norm(cs[0] - cs[1])) >= le and (best is None or cost < best[0]):
+                best = (cost, ([ends[i] for i in a], [ends[i] for i in b]), np.array(cs))
+    if best is None:
+        return None
+    return best[1], best[2]
+
+
 def route_creases(V: np.ndarray, loop: np.ndarray, ends: list[CreaseEnd]) -> CreaseRoute | None:
     """Pair the crease ends of a loop and route them (None when there is nothing to route)."""
     P = V[loop]
@@ -278,6 +418,20 @@ def route_creases(V: np.ndarray, loop: np.ndarray, ends: list[CreaseEnd]) -> Cre
     ends = [e for e in ends if e.chain_length >= MIN_CHAIN_EDGES * le]
     if len(ends) < 2:
         return None
+    k = len(loop)
+    segs, curves, kinds = [], [], []
+    points_t: list[np.ndarray] = []
+    view = np.zeros(3)
+    corner = _exact_corner(P, ends)
+    if corner is not None:
+        grp, c = corner
+        points_t.append(c)
+        view = np.sum([ends[i].direction for i in grp], axis=0)
+        for i in grp:
+            segs.append((ends[i].pos, k))
+            curves.append(_arc_to(P[ends[i].pos], ends[i].direction, c))
+            kinds.append("corner")
+        ends = [e for i, e in enumerate(ends) if i not in grp]
     cos_turn = np.cos(np.radians(PAIR_MAX_TURN))
     cand = []
     for a in range(len(ends)):
@@ -307,7 +461,6 @@ def route_creases(V: np.ndarray, loop: np.ndarray, ends: list[CreaseEnd]) -> Cre
                 and abs(float(ends[c[2]].direction @ nh)) <= sin_tilt]
     cand.sort(reverse=True)
     used: set[int] = set()
-    segs, curves, kinds = [], [], []
     for _, a, b in cand:
         if a in used or b in used:
             continue
@@ -324,8 +477,6 @@ def route_creases(V: np.ndarray, loop: np.ndarray, ends: list[CreaseEnd]) -> Cre
     rest = [e for i, e in enumerate(ends) if i not in used]
     # T-junctions: a leftover crease whose line meets a paired crease ends on it (fandisk: a
     # concave crease meeting a straight convex one); the pair is split at the junction
-    k = len(loop)
-    points_t: list[np.ndarray] = []
     left = []
     for e in rest:
         best = None
@@ -369,7 +520,6 @@ def route_creases(V: np.ndarray, loop: np.ndarray, ends: list[CreaseEnd]) -> Cre
     seen: set[int] = set()
     rest = [e for e in rest if not (e.pos in seen or seen.add(e.pos))]
     points = np.asarray(points_t, float).reshape(-1, 3)
-    view = np.zeros(3)
     if len(rest) >= MIN_CORNER:
         c = _corner_point(np.array([P[e.pos] for e in rest]),
                           np.array([e.direction for e in rest]),
@@ -382,6 +532,23 @@ def route_creases(V: np.ndarray, loop: np.ndarray, ends: list[CreaseEnd]) -> Cre
                 p0 = P[e.pos]
                 segs.append((e.pos, kc))
                 curves.append(np.stack([p0, c - p0, c, c - p0]))  # straight
+                kinds.append("corner")
+        elif len(rest) == 4:
+            twin = _twin_corners(P, rest)
+            if twin is not None:
+                groups, cs = twin
+                kc = k + len(points)
+                points = np.r_[points, cs]
+                view = np.sum([e.direction for e in rest], axis=0)
+                for g, grp in enumerate(groups):
+                    c = cs[g]
+                    for e in grp:
+                        p0 = P[e.pos]
+                        segs.append((e.pos, kc + g))
+                        curves.append(np.stack([p0, c - p0, c, c - p0]))
+                        kinds.append("corner")
+                segs.append((kc, kc + 1))  # the crease joining the two corners
+                curves.append(np.stack([cs[0], cs[1] - cs[0], cs[1], cs[1] - cs[0]]))
                 kinds.append("corner")
     if not segs:
         return None

@@ -125,7 +125,8 @@ def enclose_loop(P: np.ndarray, *, edge_length: float | None = None, method: str
         # inside; a corner goes to the mean of its ends' disc positions
         s_ = np.r_[0.0, np.cumsum(el)[:-1]] / Lp
         Qd = np.c_[np.cos(2 * np.pi * s_), np.sin(2 * np.pi * s_)]
-        Qc = np.array([Qd[creases.segments[creases.segments[:, 1] == k + j, 0]].mean(axis=0)
+        sg = creases.segments
+        Qc = np.array([Qd[sg[(sg[:, 1] == k + j) & (sg[:, 0] < k), 0]].mean(axis=0)
                        for j in range(len(creases.points))]).reshape(-1, 2)
         patch = _enclose_with_creases(P, Qd, segs, h * 2 * np.pi / Lp, creases, c, None, None,
                                       "disc", Qc=Qc, allow_drop=False)
