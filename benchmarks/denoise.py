@@ -10,6 +10,8 @@ Usage (from the project root)::
     python benchmarks/denoise.py --profile            # cProfile + per-phase breakdown, fandisk
     python benchmarks/denoise.py --profile scale:twelve:4 --iters 10   # same at 1.18M vertices
     python benchmarks/denoise.py --n-solver-table     # N-subproblem: CG vs sparse Cholesky/LU
+    python benchmarks/denoise.py --vs-meshlib         # side by side with MeshLib (first/warm)
+    python benchmarks/denoise.py --before old.json    # MSAE of an earlier run beside each row
     python -m cProfile -s tottime benchmarks/denoise.py --run-one noisy/fandisk__gauss0.3
 
 Rows
@@ -117,10 +119,12 @@ def _f(x, fmt="{:.2f}"):
     return "n/a" if x is None or (isinstance(x, float) and not np.isfinite(x)) else fmt.format(x)
 
 
-def table_markdown(rows: list[dict]) -> str:
+def table_markdown(rows: list[dict], before: dict[str, float] | None = None) -> str:
     hdr = ("| case | nV | iters (stop) | s/iter | total s | setup s | I/O s (read+write) | "
            "tracemalloc peak MB | RSS Δ MB | MSAE noisy → result (deg²) | E_V noisy → result |")
     out = [hdr, "|---|---:|---|---:|---:|---:|---:|---:|---:|---|---|"]
+    if before:
+        out = [hdr + " MSAE before (Δ) |", out[1] + "---|"]
     for r in rows:
         if "error" in r:
             out.append(f"| {r['name']} | FAILED: {r['error'].splitlines()[-1][:120]} |")
@@ -132,6 +136,10 @@ def table_markdown(rows: list[dict]) -> str:
             f"{r['io_read_s'] + r['io_write_s']:.3f} | {_f(r.get('trace_peak_mb'), '{:.0f}')} | "
             f"{r['rss_delta_mb']:.0f} | {r['msae_in']:.1f} → {r['msae_out']:.2f} | "
             f"{r['ev_in']:.2e} → {r['ev_out']:.2e} |")
+        if before:
+            b = before.get(r["name"])
+            out[-1] += (f" {b:.2f} ({100 * (r['msae_out'] / b - 1):+.2f} %) |" if b
+                        else " n/a |")
     return "\n".join(out)
 
 
@@ -227,12 +235,13 @@ class PhaseTimer:
     H = "history energy (6) + entry"
     ON_ENTER = {"run_inner": V, "ADMMSolver._mask": "mask M_E (dihedral threshold, chains)",
                 "ADMMSolver.energy": H, "_kernels.reg_energy": H,
+                "_fused.lengths_reg_energy": "new edge lengths + history energy (6) + entry",
                 "TangentialRelaxer.step": "tangential relaxation"}
     ON_EXIT = {"t_update": N, "run_inner": MU, "TangentialRelaxer.step": MU,
                "ADMMSolver._mask": T}
     # (alternatives: the history energy was ADMMSolver.energy, then _kernels.reg_energy)
     ANCHORS = ("t_update", "run_inner", "ADMMSolver._mask",
-               "ADMMSolver.energy|_kernels.reg_energy")
+               "ADMMSolver.energy|_kernels.reg_energy|_fused.lengths_reg_energy")
 
     def __init__(self):
         self.depth = 0
@@ -436,6 +445,158 @@ def n_solver_table(args) -> str:
     return "\n".join(rows)
 
 
+# --------------------------------------------------------------------------------------------
+# side by side with MeshLib meshDenoiseViaNormals (issue 15), and the targets
+# --------------------------------------------------------------------------------------------
+
+VS_CASES = [  # (name, base mesh, subdivision levels): noisy CAD parts, normal noise γ = 0.3
+    ("twelve +γ0.3", "twelve", 0),
+    ("screwdriver ×1 subdiv +γ0.3", "screwdriver", 1),
+    ("screwdriver ×3 subdiv +γ0.3", "screwdriver", 3),
+]
+TARGETS = {"vs_ratio": 1.0, "full_1m_s": 30.0, "full_1m_rss_mb": 3000.0, "exponent": 1.05}
+
+
+def _vs_worker(spec: dict) -> dict:
+    import subprocess
+
+    cmd = [sys.executable, str(Path(__file__).resolve().parent / "_vs_meshlib.py"), "--worker",
+           json.dumps(spec)]
+    p = subprocess.run(cmd, capture_output=True, text=True, cwd=str(C.ROOT))
+    for line in p.stdout.splitlines():
+        if line.startswith("RESULT "):
+            return json.loads(line[7:])
+    return {"error": f"exit {p.returncode}: " + "\n".join(p.stderr.strip().splitlines()[-5:])}
+
+
+def _med(rs: list[dict], k: str) -> float:
+    return float(np.median([x[k] for x in rs]))
+
+
+def _ratio(ml: list[dict], mr: list[dict], k: str, cold: bool = False) -> float:
+    """Median over paired rounds of meshrepair / MeshLib (``cold``: import included)."""
+    def v(x):
+        return x[k] + (x["import_s"] if cold else 0.0)
+    return float(np.median([v(b) / v(a) for a, b in zip(ml, mr, strict=True)]))
+
+
+def vs_meshlib(args) -> list[dict]:
+    """Each case: MeshLib and meshrepair in turn (A B A B ...), each in a fresh process,
+    ``--vs-rounds`` times; per figure the median, and the median of the per-round ratios. One
+    untimed meshrepair run first fills numba's disk cache, so that "first call" means loading
+    the compiled kernels (as after any earlier use), not compiling them after an install."""
+    rows = []
+    for name, base, lv in VS_CASES:
+        if args.only and not re.search(args.only, name, re.I):
+            continue
+        C.generate_subprocess(base, lv, SCALE_GAMMA)
+        npz = str(C.CACHE / f"{base}_sub{lv}_g{SCALE_GAMMA:g}_s0.npz")
+        warm = 3 if lv <= 1 else 1
+        runs: dict[str, list[dict]] = {"meshlib": [], "meshrepair": []}
+        if not vs_meshlib.warmed:  # fill numba's disk cache (a fresh copy compiles once)
+            _vs_worker({"lib": "meshrepair", "npz": npz, "warm": 0})
+            vs_meshlib.warmed = True
+        for _ in range(args.vs_rounds):
+            for lib in ("meshlib", "meshrepair"):
+                r = _vs_worker({"lib": lib, "npz": npz, "warm": warm})
+                if "error" in r:
+                    raise SystemExit(f"{name} {lib}: {r['error']}")
+                runs[lib].append(r)
+                print(f"  {name} {lib}: import {r['import_s']:.2f} first {r['first_s']:.3f} "
+                      f"warm {r['warm_s']:.3f} msae {r['msae_out']:.2f}", file=sys.stderr,
+                      flush=True)
+        ml, mr = runs["meshlib"], runs["meshrepair"]
+
+        rows.append({"name": name, "nV": mr[0]["nV"], "rounds": args.vs_rounds, "warm_calls": warm,
+                     "ml_import": _med(ml, "import_s"), "ml_first": _med(ml, "first_s"),
+                     "ml_warm": _med(ml, "warm_s"), "mr_import": _med(mr, "import_s"),
+                     "mr_first": _med(mr, "first_s"), "mr_warm": _med(mr, "warm_s"),
+                     "ratio_first": _ratio(ml, mr, "first_s"),
+                     "ratio_warm": _ratio(ml, mr, "warm_s"),
+                     "ratio_cold": _ratio(ml, mr, "first_s", cold=True),
+                     "ml_msae": ml[0]["msae_out"], "mr_msae": mr[0]["msae_out"],
+                     "msae_in": mr[0]["msae_in"], "runs": runs})
+    return rows
+
+
+vs_meshlib.warmed = False
+
+
+def _before_msae(path: Path | None) -> dict[str, float]:
+    """``name -> meshrepair MSAE`` from the ``--json`` of an earlier run (e.g. the code before
+    this work, run from a frozen copy)."""
+    if path is None:
+        return {}
+    d = json.loads(path.read_text())
+    out = {r["name"]: r["msae_out"] for r in d.get("results", []) if "msae_out" in r}
+    out.update({r["name"]: r["mr_msae"] for r in d.get("vs_meshlib", [])})
+    return out
+
+
+def vs_markdown(rows: list[dict], before: dict[str, float]) -> str:
+    out = ["| case | nV | MeshLib first / warm s | meshrepair first / warm s | ratio first | "
+           "ratio warm | import + first call s (MeshLib / meshrepair, ratio) | MSAE noisy | "
+           "MSAE MeshLib | MSAE meshrepair | MSAE meshrepair before |",
+           "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|"]
+    for r in rows:
+        b = before.get(r["name"])
+        out.append(
+            f"| {r['name']} | {r['nV']:,} | {r['ml_first']:.3f} / {r['ml_warm']:.3f} | "
+            f"{r['mr_first']:.3f} / {r['mr_warm']:.3f} | **{r['ratio_first']:.2f}** | "
+            f"**{r['ratio_warm']:.2f}** | {r['ml_import'] + r['ml_first']:.2f} / "
+            f"{r['mr_import'] + r['mr_first']:.2f}, {r['ratio_cold']:.2f} | {r['msae_in']:.1f} | "
+            f"{r['ml_msae']:.2f} | {r['mr_msae']:.2f} | {_f(b)} |")
+    if rows:
+        out.append(f"\nratio = meshrepair / MeshLib time, median of {rows[0]['rounds']} paired "
+                   "rounds (each library in a fresh process per round: first call after the "
+                   "import, then the minimum of the warm calls); import = the library's own "
+                   "`import`.")
+    return "\n".join(out)
+
+
+def msae_guard_markdown(results: list[dict], before: dict[str, float], tol: float = 0.02) -> str:
+    """MSAE now vs before for every row of the table/scaling runs; rows worse by more than tol."""
+    pairs = [(r["name"], before[r["name"]], r["msae_out"]) for r in results
+             if "msae_out" in r and r["name"] in before]
+    if not pairs:
+        return ""
+    worse = [f"{n} ({b:.2f} → {a:.2f})" for n, b, a in pairs if a > (1 + tol) * b]
+    d = [100 * (a / b - 1) for _, b, a in pairs]
+    return (f"MSAE against the earlier run: {len(pairs)} rows, change {min(d):+.2f} % to "
+            f"{max(d):+.2f} % (median {np.median(d):+.2f} %); rows worse by more than "
+            f"{100 * tol:.0f} %: {', '.join(worse) if worse else 'none'}.")
+
+
+def targets_markdown(vs_rows: list[dict], srows: list[dict], iters_cap: int) -> str:
+    """The targets of issue 15 that this run measured, each with its figure and met / missed."""
+    lines = ["| target | asked | measured | status |", "|---|---|---|---|"]
+
+    def st(ok):
+        return "**met**" if ok else "**missed**"
+
+    for r in vs_rows:
+        for k, lab in (("ratio_first", "first call"), ("ratio_warm", "warm call")):
+            ok = r[k] <= TARGETS["vs_ratio"]
+            lines.append(f"| time / MeshLib, {r['name']} ({r['nV']:,} V), {lab} | ≤ "
+                         f"{TARGETS['vs_ratio']:g} | {r[k]:.2f} | {st(ok)} |")
+    full = [r for r in srows if "error" not in r and not r.get("denoise_kwargs")
+            and 1_000_000 <= r["nV"] < 2_000_000]
+    for r in full:
+        lines.append(f"| full default run, {r['nV']:,} V | < {TARGETS['full_1m_s']:g} s | "
+                     f"{r['total_s']:.1f} s ({r['iterations']} its) | "
+                     f"{st(r['total_s'] < TARGETS['full_1m_s'])} |")
+        lines.append(f"| peak RSS of that process | < {TARGETS['full_1m_rss_mb']:g} MB | "
+                     f"{r['rss_peak_mb']:.0f} MB | "
+                     f"{st(r['rss_peak_mb'] < TARGETS['full_1m_rss_mb'])} |")
+    good = [r for r in srows if "error" not in r]
+    if len(good) >= 3:
+        n = np.array([r["nV"] for r in good], float)
+        k = float(np.polyfit(np.log(n), np.log([r["s_per_iter"] for r in good]), 1)[0])
+        lines.append(f"| growth exponent of s/iter ({int(n.min()):,}–{int(n.max()):,} V) | ≤ "
+                     f"{TARGETS['exponent']:g} | {k:.3f} | {st(k <= TARGETS['exponent'])} |")
+    return "\n".join(lines) if len(lines) > 2 else ""
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0],
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
@@ -463,6 +624,13 @@ def main(argv=None) -> int:
                          "table (MESH: shared mesh name, or scale:BASE:LEVELS)")
     ap.add_argument("--n-solver-table", action="store_true",
                     help="compare n_solver='cg' and 'direct' (s/iter) instead of the table")
+    ap.add_argument("--vs-meshlib", action="store_true",
+                    help="time meshrepair against MeshLib meshDenoiseViaNormals (defaults) side "
+                         "by side at ~5k, 13.6k and 217k vertices, first call and warm")
+    ap.add_argument("--vs-rounds", type=int, default=3,
+                    help="paired rounds per --vs-meshlib case (default 3)")
+    ap.add_argument("--before", type=Path, metavar="JSON",
+                    help="the --json of an earlier run: print its MSAE beside this run's")
     ap.add_argument("--run-one", metavar="MESH",
                     help="run one default denoise in process (for python -m cProfile)")
     args = ap.parse_args(argv)
@@ -495,9 +663,12 @@ def main(argv=None) -> int:
             args.out.write_text(txt + "\n")
         return 0
     table, scaling = build_cases(args)
+    if args.vs_meshlib and not args.only:
+        table, scaling = [], []  # --vs-meshlib alone: only the side-by-side rows
     print(f"# machine: {info}", file=sys.stderr)
     results = []
     t_all = time.perf_counter()
+    vs_rows = vs_meshlib(args) if args.vs_meshlib else []
     for c in table + scaling:
         if c["kind"] == "scaling":
             C.generate_subprocess(c["base"], c["levels"], c["gamma"], c["seed"])
@@ -519,16 +690,28 @@ def main(argv=None) -> int:
           f"numba {info.get('numba')}; repo at git {info.get('git')}, package "
           f"`{info.get('pkg')}`; "
           f"BLAS limited to 1 thread; load average at start {info.get('loadavg')}, at end "
-          f"{info_end.get('loadavg')}; benchmark wall time {time.perf_counter() - t_all:.0f} s; "
+          f"{info_end.get('loadavg')}; memory probe {info.get('memprobe_ms')} ms at start, "
+          f"{info_end.get('memprobe_ms')} ms at end; "
+          f"benchmark wall time {time.perf_counter() - t_all:.0f} s; "
           f"{time.strftime('%Y-%m-%d %H:%M')}.", ""]
     rows = [r for r in results if r["kind"] != "scaling"]
     srows = [r for r in results if r["kind"] == "scaling"]
+    before = _before_msae(args.before)
     if rows:
         md += [f"Default `denoise(V, F)`; min of {args.repeats} runs per case.", "",
-               table_markdown(rows), ""]
+               table_markdown(rows, before), ""]
     if srows:
         md += ["Scaling (subdivided shared mesh + normal noise γ = 0.3, seed 0):", "",
                scaling_markdown(srows, args.iters), ""]
+    if vs_rows:
+        md += ["Side by side with MeshLib `meshDenoiseViaNormals` (default settings):", "",
+               vs_markdown(vs_rows, before), ""]
+    guard = msae_guard_markdown(results, before)
+    if guard:
+        md += [guard, ""]
+    tg = targets_markdown(vs_rows, srows, args.iters)
+    if tg:
+        md += ["Targets (issue 15) measured in this run:", "", tg, ""]
     states = sorted({r["pkg"].split("@")[-1][:10] for r in results if r.get("pkg")})
     if len(states) > 1:
         md.append(f"**Warning**: the package changed during the run ({states}); rows are not "
@@ -540,7 +723,8 @@ def main(argv=None) -> int:
         args.out.parent.mkdir(parents=True, exist_ok=True)
         args.out.write_text(text + "\n")
     if args.json:
-        args.json.write_text(json.dumps({"machine": info, "results": results}, indent=1))
+        args.json.write_text(json.dumps({"machine": info, "results": results,
+                                         "vs_meshlib": vs_rows}, indent=1))
     return 1 if any("error" in r for r in results) else 0
 
 

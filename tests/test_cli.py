@@ -8,7 +8,9 @@ import pytest
 from meshrepair.cli import build_parser, main
 from meshrepair.io import read_mesh, write_mesh
 
-from .conftest import SHARED
+from .bundled import bundled_mesh, data_path
+
+SPOT = data_path("spot.ply")
 
 
 def test_help_lists_commands(capsys):
@@ -20,7 +22,7 @@ def test_help_lists_commands(capsys):
 
 
 def test_noise_denoise_metrics_roundtrip(tmp_path, capsys):
-    src = SHARED / "spot.ply"
+    src = SPOT
     noisy = tmp_path / "noisy.ply"
     out = tmp_path / "out.ply"
     assert main(["noise", str(src), str(noisy), "--gamma", "0.2", "--seed", "3"]) == 0
@@ -81,11 +83,16 @@ def test_parser_options_documented():
 
 def test_repair_commands_write_html_report(tmp_path):
     out, rep = tmp_path / "filled.ply", tmp_path / "run.html"
-    assert main(["fill", str(SHARED / "bunny.ply"), str(out), "--report", str(rep)]) == 0
+    V, F = bundled_mesh("spot.ply")
+    holed = tmp_path / "holed.ply"  # spot with two holes cut out
+    cut = np.linalg.norm(V[F].mean(axis=1) - V[0], axis=1) < 0.15
+    cut |= np.linalg.norm(V[F].mean(axis=1) - V[1500], axis=1) < 0.1
+    write_mesh(holed, V, F[~cut])
+    assert main(["fill", str(holed), str(out), "--report", str(rep), "-q"]) == 0
     html = rep.read_text()
     assert "holes filled" in html and html.count("data:image/png;base64,") >= 2
     noisy, den, rep2 = tmp_path / "n.ply", tmp_path / "d.ply", tmp_path / "d.html"
-    assert main(["noise", str(SHARED / "spot.ply"), str(noisy), "--gamma", "0.2"]) == 0
+    assert main(["noise", str(SPOT), str(noisy), "--gamma", "0.2"]) == 0
     assert main(["denoise", str(noisy), str(den), "-q", "--report", str(rep2)]) == 0
     assert "noise estimate" in rep2.read_text()
 
@@ -105,10 +112,10 @@ def test_ctrl_c_stops_cleanly(tmp_path, monkeypatch, save):
 
     monkeypatch.setattr(common.ProgressBar, "__call__", interrupt_at_3)
     out = tmp_path / "o.ply"
-    args = ["denoise", str(SHARED / "spot.ply"), str(out), "-q"]
+    args = ["denoise", str(SPOT), str(out), "-q"]
     rc = main(args + (["--save-on-interrupt"] if save else []))
     if save:
         assert rc == 0 and out.exists()
-        assert read_mesh(out).V.shape == read_mesh(SHARED / "spot.ply").V.shape
+        assert read_mesh(out).V.shape == read_mesh(SPOT).V.shape
     else:
         assert rc == 130 and not out.exists()

@@ -30,7 +30,7 @@ from meshrepair.metrics import distances, point_to_surface
 from meshrepair.topology import boundary_loops, edge_topology
 from meshrepair.validate import check_mesh
 
-from .conftest import shared_mesh
+from .bundled import bundled_mesh
 
 # ----------------------------------------------------------------------------------------------
 # helpers
@@ -38,12 +38,12 @@ from .conftest import shared_mesh
 
 @pytest.fixture(scope="module")
 def spot():
-    return shared_mesh("spot.ply")
+    return bundled_mesh("spot.ply")
 
 
 @pytest.fixture(scope="module")
 def star():
-    return shared_mesh("trim_star.ply")
+    return bundled_mesh("trim_star.ply")
 
 
 def geodesic_disc(V, F, center, radius):
@@ -320,7 +320,7 @@ def test_denoise_option_solves_whole_mesh(spot):
 def test_fandisk_is_not_mirror_symmetric():
     """fandisk.ply has no mirror plane (best principal plane: mirrored vertices 1.7 mean edge
     lengths from the surface), so the symmetric test uses trim_star.ply (0.005)."""
-    V, F = shared_mesh("fandisk.ply")
+    V, F = bundled_mesh("fandisk.ply")
     n, _, d = symmetry_plane(V, F)
     assert n is None and d > 1.0
 

@@ -13,12 +13,13 @@ from meshrepair.noise import add_noise, estimate_noise
 from meshrepair.solver import StopRequested
 from meshrepair.topology import edge_topology
 
+from .bundled import bundled_mesh
 from .conftest import shared_mesh
 
 
 @pytest.fixture(scope="module")
 def fandisk():
-    return shared_mesh("fandisk.ply")
+    return bundled_mesh("fandisk.ply")
 
 
 @pytest.fixture(scope="module")
@@ -28,7 +29,7 @@ def nicolo():
 
 @pytest.fixture(scope="module")
 def spot():
-    return shared_mesh("spot.ply")
+    return bundled_mesh("spot.ply")
 
 
 def test_energy_non_increasing_and_rule_35(fandisk):
@@ -120,6 +121,7 @@ def test_quality_cad_fandisk(fandisk, gamma, direction):
     assert np.median(np.abs(dr[crease] - dg[crease])) < (4.0 if gamma < 0.3 else 9.0)
 
 
+@pytest.mark.shared
 @pytest.mark.parametrize("gamma", [0.2, 0.4])
 @pytest.mark.parametrize("direction", ["normal", "random"])
 def test_quality_organic_nicolo(nicolo, gamma, direction):
@@ -140,7 +142,7 @@ def test_quality_coarse_organic_spot(spot):
 
 def test_published_noisy_pair_fandisk(fandisk):
     V, F = fandisk
-    Vn, Fn = shared_mesh("noisy/fandisk__gauss0.3.ply")
+    Vn, Fn = bundled_mesh("fandisk_noisy.ply")  # = shared noisy/fandisk__gauss0.3.ply
     assert np.array_equal(F, Fn)
     r = denoise(Vn, F)
     assert msae(r.V, V, F) < 30.0  # noisy input: 992.5
@@ -162,6 +164,7 @@ def test_open_mesh_keeps_boundary_sensible():
     assert msae(r.V, V, F) < msae(Vn, V, F) / 3
 
 
+@pytest.mark.shared
 def test_real_scan_rabbit_defaults():
     """The shared real scan (no ground truth, real noise, a 1104-edge opening): the defaults
     lower the estimated noise at least 3x without folding faces, shrinking the shape or moving

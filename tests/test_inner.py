@@ -88,3 +88,37 @@ def test_sliver_does_not_stall_descent(rng):
     move_pre = np.linalg.norm(pre - V, axis=1)[far].mean()
     assert prob.energy(pre) < e0
     assert move_pre > 10 * move_plain  # the rest of the mesh still moves
+
+
+def test_fused_preconditioned_armijo_equals_the_unfused_loop(rng):
+    """solve_armijo's fused passes give the iterates of the textbook loop (diag_scale once,
+    d = -D⁻¹g, backtracking from twice the last step with numpy temporaries)."""
+    from meshrepair.inner import _armijo_line
+
+    prob, V, *_ = _problem(rng)
+
+    def reference(V, iters, state):
+        E, g = prob.energy_grad(V)
+        step = state.step * 2.0
+        hinv = 1.0 / prob.diag_scale(V)[:, None]
+        for it in range(iters):
+            d = -g * hinv
+            gg = -float(np.einsum("ij,ij->", g, d))
+            V, E, step = _armijo_line(prob, V, E, g, d, -gg, step)
+            if step == 0.0:
+                break
+            state.step = step
+            if it + 1 < iters:
+                E, g = prob.energy_grad(V)
+                step *= 2.0
+        return V
+
+    s1, s2 = InnerState(step=1.0, precondition=True), InnerState(step=1.0, precondition=True)
+    V0 = V.copy()
+    A, B = V, V
+    for _ in range(4):  # warm-started as in the ADMM loop
+        A = run_inner("armijo", prob, A, 3, s1)
+        B = reference(B, 3, s2)
+    assert np.array_equal(V, V0)  # the input is never written
+    assert np.allclose(A, B, rtol=0, atol=1e-12) and s1.step == s2.step
+    assert prob.energy(A) < prob.energy(V0)

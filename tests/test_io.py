@@ -11,10 +11,9 @@ import pytest
 from meshrepair.errors import MeshRepairError
 from meshrepair.io import MeshData, as_arrays, read_mesh, read_vertex_mask, write_mesh
 
-from .conftest import SHARED, needs_meshes
+from .bundled import data_path
 
-MESHES = SHARED
-FANDISK = MESHES / "fandisk.ply"
+FANDISK = data_path("fandisk.ply")
 
 
 def _mesh():
@@ -110,7 +109,6 @@ def test_ply_attributes_round_trip(tmp_path, binary):
     assert ply["vertex"].properties[0].val_dtype == "f8"
 
 
-@needs_meshes
 def test_real_mesh_read_and_rewrite_bit_identical(tmp_path):
     m = read_mesh(FANDISK)
     assert m.V.shape == (6475, 3) and m.F.shape == (12946, 3)

@@ -159,3 +159,89 @@ def test_creased_edges_match_dihedral_threshold(mesh):
         assert want.any() and not want.all()
         assert np.array_equal(K.creased(N, fa, fb, th), want)
         assert np.array_equal(K._nb_creased(N, fa, fb, np.cos(np.radians(th))), want)
+
+
+def test_fused_armijo_kernels_agree_with_numpy(mesh, rng):
+    """The fused V-descent passes (energy + gradient + Jacobi scale, direction, trial point)
+    equal their numpy twins and the unfused kernels."""
+    from meshrepair import _fused as FU
+
+    V, F = mesh
+    z = rng.normal(size=(len(F), 3))
+    V0 = V + 0.1 * rng.normal(size=V.shape)
+    w = rng.random(len(V))
+    w[::7] = 0.0  # vertices outside the fidelity region
+    S = sp.csr_matrix((np.ones(3 * len(F)), (F.T.ravel(), np.arange(3 * len(F)))),
+                      shape=(len(V), 3 * len(F)))
+    g1, h1 = np.empty_like(V), np.empty(len(V))
+    e1 = FU._nb_venergy_grad_hdiag(V, F, z, V0, w, g1, h1)
+    e2, g2, h2 = FU._np_venergy_grad_hdiag(V, F, z, V0, w, S)
+    assert e1 == pytest.approx(e2, rel=1e-12)
+    assert np.allclose(g1, g2, rtol=1e-10, atol=1e-12) and np.allclose(h1, h2, rtol=1e-12)
+    assert np.allclose(h1, K._nb_vhess_diag(V, F, z, w), rtol=1e-13)
+    g3 = np.empty_like(V)
+    assert e1 == pytest.approx(K._nb_venergy_grad(V, F, z, V0, w, g3), rel=1e-13)
+    assert np.allclose(g1, g3, rtol=1e-12, atol=1e-13)
+    hmin = float(np.median(h1))
+    d1, d2 = np.empty_like(V), np.empty_like(V)
+    s1 = FU._nb_descent_direction(g1, h1, hmin, d1)
+    s2 = FU._np_descent_direction(g1, h1, hmin, d2)
+    assert np.allclose(d1, d2, rtol=1e-15) and s1 == pytest.approx(s2, rel=1e-12) and s1 > 0
+    o1, o2 = np.empty_like(V), np.empty_like(V)
+    t1 = FU._nb_venergy_trial(V, d1, 0.3, o1, F, z, V0, w)
+    t2 = FU._np_venergy_trial(V, d1, 0.3, o2, F, z, V0, w)
+    assert np.allclose(o1, V + 0.3 * d1, rtol=1e-15, atol=1e-15) and np.allclose(o1, o2)
+    assert t1 == pytest.approx(t2, rel=1e-12)
+    assert t1 == pytest.approx(K._nb_venergy(V + 0.3 * d1, F, z, V0, w), rel=1e-14)
+
+
+def test_rel_change_kernel_agrees(mesh, rng):
+    from meshrepair import _fused as FU
+
+    V, _ = mesh
+    W = V + 1e-3 * rng.normal(size=V.shape)
+    want = np.linalg.norm(W - V) / np.linalg.norm(V)
+    assert FU._nb_rel_change(W, V) == pytest.approx(want, rel=1e-12)
+    assert FU._np_rel_change(W, V) == pytest.approx(want, rel=1e-12)
+    assert FU.rel_change(V, V) == 0.0
+
+
+def test_kernels_compile_without_a_writable_numba_cache():
+    """Where numba finds no writable cache location it refuses cache=True at decoration time;
+    the package then still imports and runs, compiling its kernels in the process."""
+    code = (
+        "import numba.core.caching as c\n"
+        "c.CacheImpl._locator_classes = []\n"  # as if no cache directory were writable
+        "import numpy as np, meshrepair._kernels as K\n"
+        "assert K.CACHE_DISABLED, 'expected the no-cache fallback'\n"
+        "V = np.array([[0., 0, 0], [1, 0, 0], [0, 1, 0]]); F = np.array([[0, 1, 2]])\n"
+        "assert np.allclose(K.face_normals(V, F), [[0, 0, 1]])\n"
+    )
+    subprocess.run([sys.executable, "-c", code], check=True)
+
+
+def test_fused_multiplier_and_history_kernels_agree(mesh, rng):
+    """Normals + (21) in one face pass, lengths + regulariser of (6) in one edge pass: equal to
+    the separate kernels (and so to their numpy twins)."""
+    from meshrepair import _fused as FU
+
+    V, F = mesh
+    V = V.copy()
+    V[F[0, 1]] = V[F[0, 0]]  # a degenerate face gets a zero normal
+    topo = edge_topology(F, len(V))
+    ie = np.flatnonzero(topo.interior)
+    E = np.ascontiguousarray(topo.edges[ie])
+    fa, fb = (np.ascontiguousarray(c) for c in topo.edge_faces[ie].T)
+    N = K._np_face_normals(V + 0.01 * rng.normal(size=V.shape), F)
+    r1, r2 = rng.normal(size=N.shape), None
+    r2 = r1.copy()
+    Nv1, s1 = FU._nb_normals_update_rho2(V, F, N, r1, 3.0)
+    Nv2 = K._np_face_normals(V, F)
+    s2 = K._np_update_rho2(N, Nv2, r2, 3.0)
+    assert np.allclose(Nv1, Nv2, atol=1e-15) and not Nv1[0].any()
+    assert np.allclose(r1, r2, atol=1e-14) and s1 == pytest.approx(s2, rel=1e-12)
+    sharp = rng.random(len(ie)) < 0.3
+    l1, e1 = FU._nb_lengths_reg_energy(V, E, Nv2, fa, fb, sharp, 10.0, 1.0)
+    l2 = K._np_edge_lengths(V, E)
+    assert np.allclose(l1, l2, rtol=1e-15)
+    assert e1 == pytest.approx(K._np_reg_energy(Nv2, l2, fa, fb, sharp, 10.0, 1.0), rel=1e-12)

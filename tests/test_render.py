@@ -324,7 +324,7 @@ def test_cli_render(tmp_path):
     # per-vertex values from a .npy file
     npy = tmp_path / "h.npy"
     np.save(npy, V[:, 1])
-    args = _parser().parse_args(["render", str(src), str(out), "--color", str(npy)])
+    args = _parser().parse_args(["render", str(src), str(out), "--color", str(npy), "--force"])
     assert args.func(args) == 0
 
 
@@ -361,7 +361,7 @@ def test_cli_compare_with_reference(tmp_path, capsys):
     m = reference_metrics(noisy, F, V)
     assert m["MSAE"] > 0 and m["E_V"] == pytest.approx(np.linalg.norm(noisy - V) / len(V))
     assert reference_metrics(V, F, V) == pytest.approx({"MSAE": 0.0, "E_V": 0.0}, abs=1e-9)
-    args = _parser().parse_args(["compare", paths[0], str(out), "--titles", "a", "b"])
+    args = _parser().parse_args(["compare", paths[0], str(out), "--titles", "a", "b", "--force"])
     with pytest.raises(MeshRepairError, match="titles"):
         args.func(args)
 
@@ -479,7 +479,7 @@ def test_cli_render_and_compare_frame_a_hole_and_a_region(tmp_path):
     # (nearly) the whole picture (measured 91 %); the whole sphere covers ~66 % of it
     assert foreground(img).mean() > 0.85
     assert main(["render", str(holey), str(out), "--size", "200", "200", "--color", "none",
-                 "--view-dir=-1,0,0"]) == 0
+                 "--view-dir=-1,0,0", "--force"]) == 0
     assert foreground((imread(out)[..., :3] * 255).astype(int)).mean() < 0.75
     # the filled patch, coloured by the 'filled' attribute (categorical), fills most of it
     out2 = tmp_path / "patch.png"
@@ -497,6 +497,6 @@ def test_cli_render_and_compare_frame_a_hole_and_a_region(tmp_path):
     right = img3[:, 150:300]
     assert ((right[..., 0] - right[..., 2]) > 100).mean() > 0.2  # titles included
     assert ((img3[:, :150, 0] - img3[:, :150, 2]) > 100).mean() < 0.01
-    assert main(["render", str(holey), str(out), "--frame-hole", "7"]) == 2
+    assert main(["render", str(holey), str(out), "--frame-hole", "7", "--force"]) == 2
     assert main(["render", str(holey), str(out), "--look-at", "0,0,0"]) == 2
     assert main(["render", str(holey), str(out), "--frame-region", "nope"]) == 2

@@ -16,11 +16,47 @@ import numpy as np
 try:  # pragma: no cover - exercised through both paths in tests
     if os.environ.get("MESHREPAIR_NO_NUMBA", "") not in ("", "0"):
         raise ImportError
-    from numba import njit
+    from numba import njit as _numba_njit
 
     HAVE_NUMBA = True
 except ImportError:  # pragma: no cover
     HAVE_NUMBA = False
+
+CACHE_DISABLED: list[str] = []
+"""Kernels compiled without numba's on-disk cache (no writable cache location was found)."""
+
+
+def njit(**options):
+    """``numba.njit(**options)``; with ``cache=True`` the compiled kernel is kept in numba's
+    on-disk cache (``__pycache__`` beside this file, else the user cache directory, else
+    ``NUMBA_CACHE_DIR``), so a new process loads it instead of compiling it again (~1.5 ms per
+    kernel instead of seconds). Where none of these is writable, numba refuses ``cache=True`` at
+    import; the kernel is then compiled in each process instead (logged once)."""
+    def deco(fn):
+        if not options.get("cache"):
+            return _numba_njit(**options)(fn)
+        try:
+            return _numba_njit(**options)(fn)
+        except RuntimeError as exc:  # "cannot cache function ...: no locator available"
+            if "cannot cache" not in str(exc):
+                raise
+            if not CACHE_DISABLED:
+                import logging
+
+                logging.getLogger(__name__).warning(
+                    "numba found no writable cache directory (%s); compiled kernels are not "
+                    "cached: each new process compiles them again. Set NUMBA_CACHE_DIR to a "
+                    "writable directory to avoid this.", exc)
+            CACHE_DISABLED.append(fn.__name__)
+            return _numba_njit(**dict(options, cache=False))(fn)
+    return deco
+
+FASTMATH = {"contract", "arcp", "nsz", "reassoc"}
+"""LLVM fast-math flags of the hot-loop kernels: fused multiply-add, reciprocals, reassociated
+sums (vectorised reductions). Not ``nnan``/``ninf``: inputs are validated finite, and comparisons
+stay IEEE. Results differ from the numpy twins by rounding only (tests/test_kernels.py); the
+V-gradient kernel measured 15 % faster on fandisk (141 vs 165 µs); the PCG kernels
+4 % slower, so they keep strict IEEE arithmetic."""
 
 
 # ---------------------------------------------------------------------------------------------
@@ -92,7 +128,7 @@ if HAVE_NUMBA:
         bz = V[k, 2] - V[i, 2]
         return ax, ay, az, bx, by, bz, ay * bz - az * by, az * bx - ax * bz, ax * by - ay * bx
 
-    @njit(cache=True, fastmath=False)
+    @njit(cache=True, fastmath=FASTMATH)
     def _nb_venergy(V, F, z, V0, wfid):  # pragma: no cover - compiled
         e = 0.0
         for m in range(F.shape[0]):
@@ -112,7 +148,7 @@ if HAVE_NUMBA:
                 f += w * (dx * dx + dy * dy + dz * dz)
         return e + 0.5 * f
 
-    @njit(cache=True, fastmath=False)
+    @njit(cache=True, fastmath=FASTMATH)
     def _nb_venergy_grad(V, F, z, V0, wfid, grad):  # pragma: no cover - compiled
         nV = V.shape[0]
         e = 0.0
@@ -139,13 +175,14 @@ if HAVE_NUMBA:
             q = np.sqrt(cx * cx + cy * cy + cz * cz)
             if q < 1e-300:
                 q = 1e-300
-            nx, ny, nz = cx / q, cy / q, cz / q
+            iq = 1.0 / q  # one division per face (six measured 1.3x slower)
+            nx, ny, nz = cx * iq, cy * iq, cz * iq
             zx, zy, zz = z[m, 0], z[m, 1], z[m, 2]
             zn = zx * nx + zy * ny + zz * nz
             e += zn
-            gx = (zx - zn * nx) / q
-            gy = (zy - zn * ny) / q
-            gz = (zz - zn * nz) / q
+            gx = (zx - zn * nx) * iq
+            gy = (zy - zn * ny) * iq
+            gz = (zz - zn * nz) * iq
             # corner i: g x (p2 - p1)
             ux, uy, uz = p2x - p1x, p2y - p1y, p2z - p1z
             grad[i, 0] += gy * uz - gz * uy
@@ -162,7 +199,7 @@ if HAVE_NUMBA:
             grad[k, 2] += gx * ay - gy * ax
         return e + 0.5 * f
 
-    @njit(cache=True)
+    @njit(cache=True, fastmath=FASTMATH)
     def _nb_face_normals(V, F):  # pragma: no cover - compiled
         out = np.zeros((F.shape[0], 3))
         for m in range(F.shape[0]):
@@ -170,12 +207,13 @@ if HAVE_NUMBA:
             ax, ay, az, bx, by, bz, cx, cy, cz = _tri(V, i, j, k)
             q = np.sqrt(cx * cx + cy * cy + cz * cz)
             if q > 0:
-                out[m, 0] = cx / q
-                out[m, 1] = cy / q
-                out[m, 2] = cz / q
+                iq = 1.0 / q
+                out[m, 0] = cx * iq
+                out[m, 1] = cy * iq
+                out[m, 2] = cz * iq
         return out
 
-    @njit(cache=True)
+    @njit(cache=True, fastmath=FASTMATH)
     def _nb_edge_lengths(V, E):  # pragma: no cover - compiled
         out = np.empty(E.shape[0])
         for e in range(E.shape[0]):
@@ -186,7 +224,7 @@ if HAVE_NUMBA:
             out[e] = np.sqrt(dx * dx + dy * dy + dz * dz)
         return out
 
-    @njit(cache=True)
+    @njit(cache=True, fastmath=FASTMATH)
     def _nb_grad_edges(N, l, fa, fb):  # pragma: no cover - compiled
         out = np.empty((fa.shape[0], 3))
         for e in range(fa.shape[0]):
@@ -239,10 +277,13 @@ if HAVE_NUMBA:
         # CG on the Kronecker system (A ⊗ I3) vec(X) = vec(B), A = DᵀD + c I with interior-edge
         # weights w: scalar alpha/beta from Frobenius products, so the iterates are exactly
         # equivariant under rotations of the columns. Jacobi preconditioner, Z = R / diag is
-        # never stored.
+        # never stored; the direction update P = Z + beta P is made at the start of the next
+        # iteration, so none is wasted after the last. (Fusing it into the product, recomputing
+        # Z + beta P at each neighbour, measured 1.3x slower: the kernel is compute-bound there.)
         n = B.shape[0]
         W3 = np.zeros((n, 3))
         diag = np.empty(n)
+        idg = np.empty(n)
         for f in range(n):
             d = 0.0
             for k in range(3):
@@ -251,6 +292,7 @@ if HAVE_NUMBA:
                     W3[f, k] = w[e]
                     d += w[e]
             diag[f] = d + c
+            idg[f] = 1.0 / diag[f]
         R = np.empty_like(B)
         AP = np.empty_like(B)
         _nb_lap_matvec_dot(nb, W3, diag, X, AP)
@@ -259,37 +301,45 @@ if HAVE_NUMBA:
         rn = 0.0
         P = np.empty_like(B)
         for f in range(n):
-            idg = 1.0 / diag[f]
+            i = idg[f]
             for k in range(3):
                 r = B[f, k] - AP[f, k]
                 R[f, k] = r
-                P[f, k] = r * idg
+                P[f, k] = r * i
                 bn += B[f, k] * B[f, k]
-                rz += r * r * idg
+                rz += r * r * i
                 rn += r * r
         tol2 = rtol * rtol * max(bn, 1e-300)
         it = 0
+        beta = 0.0
         while it < maxiter and rn > tol2:
+            if it > 0:
+                for f in range(n):
+                    i = idg[f]
+                    P[f, 0] = R[f, 0] * i + beta * P[f, 0]
+                    P[f, 1] = R[f, 1] * i + beta * P[f, 1]
+                    P[f, 2] = R[f, 2] * i + beta * P[f, 2]
             pap = _nb_lap_matvec_dot(nb, W3, diag, P, AP)
             if pap <= 0.0:
                 break
             alpha = rz / pap
             rz_new = 0.0
             rn = 0.0
-            for f in range(n):
-                idg = 1.0 / diag[f]
-                for k in range(3):
-                    X[f, k] += alpha * P[f, k]
-                    r = R[f, k] - alpha * AP[f, k]
-                    R[f, k] = r
-                    rz_new += r * r * idg
-                    rn += r * r
+            for f in range(n):  # one accumulation per face and sum (short dependency chains)
+                X[f, 0] += alpha * P[f, 0]
+                X[f, 1] += alpha * P[f, 1]
+                X[f, 2] += alpha * P[f, 2]
+                r0 = R[f, 0] - alpha * AP[f, 0]
+                r1 = R[f, 1] - alpha * AP[f, 1]
+                r2 = R[f, 2] - alpha * AP[f, 2]
+                R[f, 0] = r0
+                R[f, 1] = r1
+                R[f, 2] = r2
+                rr = r0 * r0 + r1 * r1 + r2 * r2
+                rz_new += rr * idg[f]
+                rn += rr
             beta = rz_new / rz if rz > 0 else 0.0
             rz = rz_new
-            for f in range(n):
-                idg = 1.0 / diag[f]
-                for k in range(3):
-                    P[f, k] = R[f, k] * idg + beta * P[f, k]
             it += 1
         return it
 
@@ -340,7 +390,7 @@ def _np_vhess_diag(V, F, z, wfid):
 
 if HAVE_NUMBA:
 
-    @njit(cache=True)
+    @njit(cache=True, fastmath=FASTMATH)
     def _nb_vhess_diag(V, F, z, wfid):  # pragma: no cover - compiled
         h = wfid.copy()
         for m in range(F.shape[0]):
@@ -476,7 +526,7 @@ def _np_sqdist(A, B, wts):
 
 if HAVE_NUMBA:
 
-    @njit(cache=True)
+    @njit(cache=True, fastmath=FASTMATH)
     def _nb_rhs(c, Nv, rho2, beta1, t, rho1, l, fa, fb):  # pragma: no cover - compiled
         B = np.empty_like(Nv)
         ib = 1.0 / beta1
@@ -491,20 +541,21 @@ if HAVE_NUMBA:
                 B[b, k] -= x
         return B
 
-    @njit(cache=True)
+    @njit(cache=True, fastmath=FASTMATH)
     def _nb_normalize_z(N, Nv, rho2, beta2):  # pragma: no cover - compiled
         z = np.empty_like(N)
         for f in range(N.shape[0]):
             q = np.sqrt(N[f, 0] ** 2 + N[f, 1] ** 2 + N[f, 2] ** 2)
+            iq = 1.0 / q if q > 0 else 0.0
             for k in range(3):
                 if q > 0:
-                    N[f, k] /= q
+                    N[f, k] *= iq
                 else:
                     N[f, k] = Nv[f, k]
                 z[f, k] = rho2[f, k] - beta2 * N[f, k]
         return N, z
 
-    @njit(cache=True)
+    @njit(cache=True, fastmath=FASTMATH)
     def _nb_update_rho1(t, N, l, fa, fb, rho1, beta1):  # pragma: no cover - compiled
         s = 0.0
         for e in range(fa.shape[0]):
@@ -515,7 +566,7 @@ if HAVE_NUMBA:
                 s += r * r
         return s
 
-    @njit(cache=True)
+    @njit(cache=True, fastmath=FASTMATH)
     def _nb_update_rho2(N, Nv, rho2, beta2):  # pragma: no cover - compiled
         s = 0.0
         for f in range(N.shape[0]):
@@ -525,7 +576,7 @@ if HAVE_NUMBA:
                 s += r * r
         return s
 
-    @njit(cache=True)
+    @njit(cache=True, fastmath=FASTMATH)
     def _nb_reg_energy(Nv, l, fa, fb, sharp, a, w):  # pragma: no cover - compiled
         knee = np.sqrt(2.0 / a)
         s2a = np.sqrt(2.0 * a)
@@ -543,7 +594,7 @@ if HAVE_NUMBA:
                 e += w * n2
         return e
 
-    @njit(cache=True)
+    @njit(cache=True, fastmath=FASTMATH)
     def _nb_sqdist(A, B, wts):  # pragma: no cover - compiled
         s = 0.0
         for i in range(A.shape[0]):

@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import importlib
 import logging
+import os
 import sys
 
 from . import __version__
@@ -22,7 +23,9 @@ def build_parser() -> argparse.ArgumentParser:
                     "JMIV 2023). Start with 'meshrepair demo'.")
     p.add_argument("--version", action="version", version=f"meshrepair {__version__}")
     p.add_argument("-v", "--verbose", action="count", default=0,
-                   help="log progress (-v) or debug details (-vv)")
+                   help="log progress (-v) or debug details (-vv); before or after the command")
+    p.add_argument("-q", "--quiet", action="store_true", dest="quiet_all",
+                   help="no progress bars (also accepted after the command)")
     sub = p.add_subparsers(dest="command", metavar="COMMAND")
     for name in COMMANDS:
         try:
@@ -32,12 +35,17 @@ def build_parser() -> argparse.ArgumentParser:
                 continue
             raise
         mod.register(sub)
+    from .commands.parsing import document_defaults
+
+    document_defaults(p)
     return p
 
 
 def main(argv: list[str] | None = None) -> int:
+    from .commands.parsing import normalise_argv
+
     parser = build_parser()
-    args = parser.parse_args(argv)
+    args = parser.parse_args(normalise_argv(parser, sys.argv[1:] if argv is None else argv))
     level = logging.WARNING - 10 * min(args.verbose, 2)
     logging.basicConfig(level=level, format="%(levelname)s %(name)s: %(message)s")
     if not getattr(args, "func", None):
@@ -47,7 +55,15 @@ def main(argv: list[str] | None = None) -> int:
 
     try:
         with threadpool_limits(1):  # sparse/BLAS threads only slow this workload down
-            return int(args.func(args) or 0)
+            rc = int(args.func(args) or 0)
+        sys.stdout.flush()  # a closed pipe (| head) shows up here, not at exit
+        return rc
+    except BrokenPipeError:  # the reader went away (| head): stop quietly, like other tools
+        try:  # and keep the interpreter's final flush from printing a second traceback
+            os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        except (OSError, ValueError):  # stdout without a file descriptor (tests)
+            pass
+        return 141
     except MeshRepairError as exc:
         print(f"meshrepair: error: {exc}", file=sys.stderr)
         return 2

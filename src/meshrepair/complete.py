@@ -285,29 +285,34 @@ def complete(
         raise MeshRepairError(f"mode must be one of {MODES}, got {mode!r}")
     if orientation not in ORIENTATIONS:
         raise MeshRepairError(f"orientation must be one of {ORIENTATIONS}, got {orientation!r}")
-    if int(strip_rings) != strip_rings or strip_rings < 1:
-        raise MeshRepairError(f"strip_rings must be an integer >= 1, got {strip_rings}")
-    strip_rings = int(strip_rings)
-    if int(iterations) != iterations or iterations < 0:
-        raise MeshRepairError(f"iterations must be an integer >= 0, got {iterations}")
-    if not (np.isfinite(max_size_ratio) and max_size_ratio >= 1):
-        raise MeshRepairError(f"max_size_ratio must be a number >= 1, got {max_size_ratio}")
-    if lam is not None and not (np.isfinite(lam) and lam >= 0):
-        raise MeshRepairError(f"lam must be a finite number >= 0, got {lam}")
+    from .options import check_bool, check_int, check_number
+
+    strip_rings = check_int("strip_rings", strip_rings, low=1)
+    iterations = check_int("iterations", iterations, low=0)
+    max_size_ratio = check_number("max_size_ratio", max_size_ratio, low=1)
+    lam = check_number("lam", lam, low=0, allow_none=True)
+    if not (isinstance(th, (int, float, np.number)) and 0 < th < 180):
+        raise MeshRepairError(f"th must be an angle in (0, 180) degrees, got {th}")
+    a = check_number("a", a, low=0, low_open=True)
+    tol = check_number("tol", tol, low=0, low_open=True)
+    mask_update_every = check_int("mask_update_every", mask_update_every, low=0)
+    allow_scale = check_bool("allow_scale", allow_scale)
+    denoise = check_bool("denoise", denoise)
     if fix_outside is None:
         fix_outside = not denoise
+    fix_outside = check_bool("fix_outside", fix_outside)
     if relax is None:
         relax = 0.2 if mode == "smooth" else 0.0
-    if not (np.isfinite(relax) and 0 <= relax <= 1):
-        raise MeshRepairError(f"relax must be a number in [0, 1], got {relax}")
+    relax = check_number("relax", relax, low=0, high=1)
     if icp is True:
         icp = "auto"
     if icp is False or icp is None:
         icp = "none"
     if icp not in ICP_MODES:
         raise MeshRepairError(f"icp must be one of {ICP_MODES} (or a bool), got {icp!r}")
-    if int(icp_rings) != icp_rings or icp_rings < 0:
-        raise MeshRepairError(f"icp_rings must be an integer >= 0, got {icp_rings}")
+    icp_rings = check_int("icp_rings", icp_rings, low=0)
+    if callback is not None and not callable(callback):
+        raise MeshRepairError(f"callback must be callable or None, got {type(callback).__name__}")
     if strip_fidelity is None:
         strip_fidelity = 16.0 if mode == "adaptive" else 0.0
     if not (np.isfinite(strip_fidelity) and strip_fidelity >= 0):
@@ -331,7 +336,8 @@ def complete(
         if not loops:
             raise MeshRepairError("the mesh is closed (no hole); select the region to replace "
                                   "with region= or region_vertices=")
-        if int(hole) != hole or not 0 <= hole < len(loops):
+        if (isinstance(hole, bool) or not isinstance(hole, (int, np.integer, float))
+                or not np.isfinite(hole) or int(hole) != hole or not 0 <= hole < len(loops)):
             raise MeshRepairError(f"hole must be an integer in [0, {len(loops) - 1}] (the mesh "
                                   f"has {len(loops)} boundary loops, longest first), got {hole}")
         b0 = loops[int(hole)]

@@ -110,6 +110,9 @@ def load_transform(path_or_array) -> np.ndarray:
     import os
 
     if isinstance(path_or_array, (str, os.PathLike)):
+        from .io import check_input_file
+
+        check_input_file(path_or_array, "transform ")
         try:
             with open(path_or_array, encoding="utf-8") as fh:
                 text = fh.read()

@@ -16,6 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.sparse as sp
 
+from . import _fused
 from . import _kernels as _k
 
 STIFF_RATIO = 30.0  # vertices stiffer than this many times the median get a smaller step
@@ -70,6 +71,21 @@ class VSubproblem:
         return e, grad
 
 
+    def energy_grad_scale(self, V: np.ndarray) -> tuple[float, np.ndarray, np.ndarray, float]:
+        """``(J_V, ∇J_V, h, h_min)`` in one face pass: the diagonal scale of :meth:`diag_scale`
+        is ``max(h, h_min)`` (left unclamped here so one fused pass can apply it)."""
+        self.n_energy += 1
+        self.n_grad += 1
+        e, grad, h = _fused.venergy_grad_hdiag(V, self.F, self.z, self.V0, self.wfid, self.S)
+        if self.free is not None:
+            grad[~self.free] = 0.0
+        return e, grad, h, max(STIFF_RATIO * float(np.median(h)), 1e-300)
+
+    def energy_at(self, V: np.ndarray, d: np.ndarray, step: float, out: np.ndarray) -> float:
+        """Write ``V + step d`` into ``out`` and return ``J_V`` there (one fused pass)."""
+        self.n_energy += 1
+        return _fused.venergy_trial(V, d, step, out, self.F, self.z, self.V0, self.wfid)
+
     def diag_scale(self, V: np.ndarray) -> np.ndarray:
         """Per-vertex diagonal scale of the Hessian of (26) at ``V`` (see ``vhess_diag``)."""
         h = _k.vhess_diag(V, self.F, self.z, self.wfid)
@@ -103,12 +119,47 @@ def solve_armijo(prob: VSubproblem, V: np.ndarray, iters: int, state: InnerState
     With ``state.precondition`` the direction is ``-D⁻¹ ∇J`` with the diagonal scale of
     :meth:`VSubproblem.diag_scale` (computed once per call), and (31) uses the slope
     ``<∇J, d>``; the step is then dimensionless (≈ 1 for a well-scaled problem).
+
+    The preconditioned path runs on fused passes (:mod:`meshrepair._fused`): the scale comes
+    with the first gradient, the direction and its slope in one vertex pass, and each trial point
+    is written into one of two reused buffers while its energy is evaluated (``V`` itself is never
+    written). The iterates are those of the unfused loop.
     """
+    if not state.precondition:
+        return _solve_armijo_plain(prob, V, iters, state)
+    E, g, h, h_min = prob.energy_grad_scale(V)
+    step = state.step * 2.0
+    d = np.empty_like(V)
+    bufs = [np.empty_like(V), np.empty_like(V)]
+    c1, shrink = 1e-4, 0.5
+    for it in range(iters):
+        gg = _fused.descent_direction(g, h, h_min, d)
+        if gg == 0.0:
+            break
+        out = bufs[it % 2]
+        while step > 1e-14:  # (31) along d, slope -gg
+            En = prob.energy_at(V, d, step, out)
+            if En <= E + c1 * step * -gg:
+                break
+            step *= shrink
+        else:
+            step = state.step
+            break
+        V, E = out, En
+        state.step = step
+        if it + 1 < iters:
+            E, g = prob.energy_grad(V)
+            step *= 2.0
+    return V
+
+
+def _solve_armijo_plain(prob: VSubproblem, V: np.ndarray, iters: int, state: InnerState
+                        ) -> np.ndarray:
+    """:func:`solve_armijo` without the preconditioner (direction ``-∇J``)."""
     E, g = prob.energy_grad(V)
     step = state.step * 2.0
-    hinv = 1.0 / prob.diag_scale(V)[:, None] if state.precondition else None
     for it in range(iters):
-        d = -g if hinv is None else -g * hinv
+        d = -g
         gg = -float(np.einsum("ij,ij->", g, d))
         if gg == 0.0:
             break

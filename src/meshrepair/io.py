@@ -27,7 +27,6 @@ from __future__ import annotations
 import logging
 import os
 import re
-import secrets
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -35,6 +34,7 @@ from typing import Any
 
 import numpy as np
 
+from .atomic import atomic_write, check_writable
 from .errors import MeshRepairError
 from .validate import _as_face_array, _as_vertex_array
 
@@ -44,6 +44,7 @@ __all__ = [
     "SUPPORTED_FORMATS",
     "MeshData",
     "as_arrays",
+    "check_input_file",
     "read_mesh",
     "read_vertex_mask",
     "write_mesh",
@@ -98,6 +99,37 @@ class _Bad(Exception):
 
 def _fail_read(path: Path, why: str) -> MeshRepairError:
     return MeshRepairError(f"cannot read '{path}': {why}")
+
+
+def check_input_file(path: PathLike, what: str = "") -> Path:
+    """Check a file before opening it: every reader of the project calls this first.
+
+    Refuses a missing file, an impossible path (too long, a file used as a folder, ...), a
+    folder, and a FIFO, device or socket (opening a FIFO would block forever).
+
+    Returns
+    -------
+    pathlib.Path
+
+    Raises
+    ------
+    MeshRepairError
+        ``cannot read '<path>': <why>``.
+    """
+    import stat
+
+    path = Path(path)
+    try:
+        st = os.stat(path)
+    except FileNotFoundError:
+        raise _fail_read(path, f"{what}file not found") from None
+    except OSError as exc:  # name too long, not a directory, permission denied, loop, ...
+        raise _fail_read(path, exc.strerror or str(exc)) from None
+    if stat.S_ISDIR(st.st_mode):
+        raise _fail_read(path, "is a directory, not a file")
+    if not stat.S_ISREG(st.st_mode):
+        raise _fail_read(path, "not a regular file (a FIFO, device or socket); give a file")
+    return path
 
 
 def _suffix(path: Path) -> str:
@@ -160,6 +192,8 @@ def _read_text(path: Path) -> str:
 
 
 def _parse_floats(rows: list[list[str]], what: str, line_of: Any) -> np.ndarray:
+    if not rows:
+        return np.empty((0, 3), dtype=np.float64)
     try:
         return np.array(rows, dtype=np.float64).reshape(len(rows), -1)
     except ValueError:
@@ -185,29 +219,95 @@ _PLY_TYPES = {
 
 
 def _load_ply(path: Path) -> Any:
-    """Parse a PLY file with plyfile (fast memory-mapped path for triangle meshes)."""
+    """Parse a PLY file with plyfile (fast memory-mapped path for triangle meshes) and check
+    that the header's element counts account for all the data (no silently ignored rest)."""
     import plyfile
 
     with open(path, "rb") as fh:
         magic = fh.read(4)
     if magic[:3] != b"ply":
         raise _Bad("not a PLY file (bad header: missing 'ply' magic line)")
+    _check_ply_counts(path)
     known = {"face": dict.fromkeys(_PLY_FACE_NAMES, 3)}
     try:
         try:
             with open(path, "rb") as fh:
-                return plyfile.PlyData.read(fh, mmap="c", known_list_len=known)
+                ply = plyfile.PlyData.read(fh, mmap="c", known_list_len=known)
+                end = None if ply.text else fh.tell()
         except plyfile.PlyElementParseError as exc:
             if exc.message != "unexpected list length":
                 raise
-        with open(path, "rb") as fh:  # polygons: slow generic path
-            return plyfile.PlyData.read(fh, mmap=False)
+            with open(path, "rb") as fh:  # polygons: slow generic path
+                ply = plyfile.PlyData.read(fh, mmap=False)
+                end = None if ply.text else fh.tell()
     except plyfile.PlyHeaderParseError as exc:
         raise _Bad(f"not a PLY file (bad header: {exc})") from None
     except plyfile.PlyElementParseError as exc:
         raise _Bad(f"truncated or corrupt PLY data ({exc})") from None
     except (ValueError, TypeError, IndexError, KeyError, EOFError, OSError) as exc:
         raise _Bad(f"corrupt PLY file ({type(exc).__name__}: {exc})") from None
+    _check_ply_extent(path, ply, end)
+    return ply
+
+
+def _check_ply_counts(path: Path) -> None:
+    """Refuse, before any allocation, a header whose element counts cannot fit in the file
+    (each record takes at least 1 byte in binary, 2 in ASCII: a value and a line end)."""
+    with open(path, "rb") as fh:
+        head = fh.read(1 << 16)
+    end = head.find(b"end_header")
+    if end < 0:
+        return  # plyfile reports the bad header
+    counts, ascii_ = [], False
+    for line in head[:end].decode("ascii", "replace").splitlines():
+        t = line.split()
+        if len(t) >= 2 and t[0] == "format":
+            ascii_ = t[1] == "ascii"
+        elif len(t) == 3 and t[0] == "element" and t[2].isdigit():
+            counts.append((t[1], int(t[2])))
+    need = sum(c for _, c in counts) * (2 if ascii_ else 1)
+    size = path.stat().st_size - end
+    if need > size:
+        desc = ", ".join(f"{c:,} {n}" for n, c in counts)
+        raise _Bad(f"the header declares {desc} records, which need at least {need:,} bytes, "
+                   f"but the file has {size:,} bytes of data (corrupt header or truncated file)")
+
+
+def _ply_counts(ply: Any) -> str:
+    return ", ".join(f"{e.count} {e.name}" for e in ply.elements)
+
+
+def _check_ply_extent(path: Path, ply: Any, end: int | None) -> None:
+    """Refuse data after the last element the header declares (a header that undercounts)."""
+    size = path.stat().st_size
+    if end is not None:  # binary: the parser stopped at byte ``end``
+        if size > end:
+            with open(path, "rb") as fh:
+                fh.seek(end)
+                tail = fh.read(min(size - end, 1 << 16))
+            if size - end > len(tail) or tail.strip(b" \t\r\n"):
+                raise _Bad(f"the header declares {_ply_counts(ply)} records but {size - end} "
+                           "more bytes follow them (the header undercounts, or the file is "
+                           "corrupt); refusing to drop data silently")
+        return
+    data = path.read_bytes()  # ASCII: one line per element record after 'end_header'
+    h = data.find(b"end_header")
+    start = data.find(b"\n", h) + 1 if h >= 0 else 0
+    if start <= 0:
+        return
+    n_rec = sum(int(e.count) for e in ply.elements)
+    nl = np.flatnonzero(np.frombuffer(data, np.uint8, offset=start) == 10)
+    if n_rec == 0:
+        rest = data[start:]
+    elif len(nl) < n_rec:  # the last record has no newline
+        rest = b""
+    else:
+        rest = data[start + int(nl[n_rec - 1]) + 1:]
+    if rest.strip():
+        extra = len([ln for ln in rest.splitlines() if ln.strip()])
+        raise _Bad(f"the header declares {_ply_counts(ply)} records but {extra} more data "
+                   "lines follow them (the header undercounts, or the file is corrupt); "
+                   "refusing to drop data silently")
 
 
 def _ply_scalar_props(element: Any) -> list[Any]:
@@ -473,7 +573,9 @@ def _read_off(path: Path) -> MeshData:
     _check_indices(F, len(V))
     extra = len(lines) - (fpos + nf)
     if extra:
-        logger.debug("%s: ignoring %d lines after the declared faces", path, extra)
+        raise _Bad(f"the header declares {nv} vertices and {nf} faces but {extra} more data "
+                   f"lines follow them (from line {line_no[fpos + nf]}: the header undercounts, "
+                   "or the file is corrupt); refusing to drop data silently")
     return MeshData(V=V, F=F, path=path)
 
 
@@ -483,7 +585,40 @@ def _read_off(path: Path) -> MeshData:
 
 _STL_DTYPE = np.dtype([("normal", "<f4", (3,)), ("v", "<f4", (3, 3)), ("attr", "<u2")])
 _STL_VERTEX = re.compile(rb"\bvertex\s+(\S+)\s+(\S+)\s+(\S+)", flags=re.IGNORECASE)
-_STL_ENDFACET = re.compile(rb"\bendfacet\b", flags=re.IGNORECASE)
+_STL_KEYWORDS = re.compile(
+    rb"^[ \t]*(solid|endsolid)\b[^\n]*|\b(facet|outer|loop|vertex|endloop|endfacet)\b",
+    flags=re.IGNORECASE | re.MULTILINE)
+_STL_CODES = {b"solid": 0, b"endsolid": 1, b"facet": 2, b"outer": 3, b"loop": 4, b"vertex": 5,
+              b"endloop": 6, b"endfacet": 7}
+_STL_FACET = np.array([2, 3, 4, 5, 5, 5, 6, 7], dtype=np.int8)
+
+
+def _check_ascii_stl_structure(data: bytes) -> None:
+    """Check ``solid (facet outer loop vertex vertex vertex endloop endfacet)* endsolid``, one
+    or more solids: a file cut short (even between two facets) or with a broken facet is refused
+    instead of being read as fewer triangles."""
+    codes = np.array([_STL_CODES[(a or b).lower()] for a, b in _STL_KEYWORDS.findall(data)],
+                     dtype=np.int8)
+    if len(codes) == 0 or codes[0] != 0:
+        raise _Bad("not an STL file (ASCII 'solid' header but no facets)")
+    starts = np.flatnonzero(codes == 0)
+    ends = np.flatnonzero(codes == 1)
+    if len(ends) < len(starts) or (len(ends) and ends[-1] != len(codes) - 1):
+        n_ok = int(np.sum(codes == 7))
+        raise _Bad(f"truncated or malformed ASCII STL: no 'endsolid' after the last facet "
+                   f"(file cut short after {n_ok} facets?); refusing to read part of the mesh")
+    for a, b in zip(starts, ends, strict=False):
+        body = codes[a + 1:b]
+        bad = len(body) % 8 != 0 or len(starts) != len(ends) or b < a
+        if not bad and len(body):
+            bad = not np.array_equal(body.reshape(-1, 8), np.broadcast_to(_STL_FACET,
+                                                                          (len(body) // 8, 8)))
+        if bad:
+            good = 0
+            while good + 8 <= len(body) and np.array_equal(body[good:good + 8], _STL_FACET):
+                good += 8
+            raise _Bad(f"truncated or malformed ASCII STL: facet {good // 8} of a solid is not "
+                       "'facet normal ..., outer loop, 3 x vertex, endloop, endfacet'")
 
 
 def _merge_soup(corners: np.ndarray, path: Path) -> tuple[np.ndarray, np.ndarray]:
@@ -511,6 +646,11 @@ def _read_stl(path: Path) -> MeshData:
         n = int(np.frombuffer(data, dtype="<u4", count=1, offset=80)[0])
         expected = 84 + 50 * n
         if size == expected or (not is_solid and size > expected):
+            if size - expected >= _STL_DTYPE.itemsize:
+                raise _Bad(f"binary STL header declares {n} triangles ({expected} bytes) but "
+                           f"the file has {size} bytes: {(size - expected) // 50} more "
+                           "triangle records follow (the header undercounts, or the file is "
+                           "corrupt); refusing to drop data silently")
             if size > expected:
                 logger.warning("%s: %d trailing bytes after the binary STL data ignored", path,
                                size - expected)
@@ -518,20 +658,16 @@ def _read_stl(path: Path) -> MeshData:
             corners = rec["v"].reshape(-1, 3).astype(np.float64)
             V, F = _merge_soup(corners, path)
             return MeshData(V=V, F=F, path=path)
-        if not is_solid:
-            raise _Bad(f"truncated binary STL: header declares {n} triangles ({expected} bytes) "
+        if not is_solid or b"\x00" in data[84:]:  # binary (text STL has no NUL bytes)
+            what = "truncated" if size < expected else "inconsistent"
+            raise _Bad(f"{what} binary STL: header declares {n} triangles ({expected} bytes) "
                        f"but the file has {size} bytes")
     if not is_solid:
         raise _Bad("not an STL file (too short for binary STL and no ASCII 'solid' header)")
-    n_facet = len(_STL_ENDFACET.findall(data))
+    _check_ascii_stl_structure(data)
     found = _STL_VERTEX.findall(data)
-    if n_facet == 0 and not found:
-        if re.search(rb"\bendsolid\b", data, flags=re.IGNORECASE):
-            return MeshData(V=np.empty((0, 3)), F=np.empty((0, 3), dtype=np.int64), path=path)
-        raise _Bad("not an STL file (ASCII 'solid' header but no facets)")
-    if len(found) != 3 * n_facet:
-        raise _Bad(f"truncated or malformed ASCII STL: {n_facet} complete facets but "
-                   f"{len(found)} vertices (each facet needs exactly 3)")
+    if not found:
+        return MeshData(V=np.empty((0, 3)), F=np.empty((0, 3), dtype=np.int64), path=path)
     try:
         corners = np.array(found, dtype=np.float64).reshape(-1, 3)
     except ValueError:
@@ -541,9 +677,18 @@ def _read_stl(path: Path) -> MeshData:
 
 
 def _write_stl(fh: Any, V: np.ndarray, F: np.ndarray, binary: bool, path: Path) -> None:
-    c = np.cross(V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]])
+    if binary and len(V) and np.abs(V).max() > np.finfo(np.float32).max:
+        raise MeshRepairError(
+            f"cannot write '{path}': coordinates up to {np.abs(V).max():.3g} do not fit the "
+            "float32 of binary STL; write PLY, OBJ or ASCII STL (binary=False)")
+    # face normals from edges scaled per face: no overflow for huge coordinates
+    e1, e2 = V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]]
+    with np.errstate(over="ignore", invalid="ignore"):
+        s = np.maximum(np.abs(e1).max(axis=1), np.abs(e2).max(axis=1))[:, None]
+        s = np.where(np.isfinite(s) & (s > 0), s, 1.0)
+        c = np.cross(e1 / s, e2 / s)
     nrm = np.linalg.norm(c, axis=1, keepdims=True)
-    N = np.divide(c, nrm, out=np.zeros_like(c), where=nrm > 0)
+    N = np.divide(c, nrm, out=np.zeros_like(c), where=(nrm > 0) & np.isfinite(nrm))
     if binary:
         V32 = V.astype(np.float32)
         if not np.array_equal(V32.astype(np.float64), V):
@@ -604,10 +749,7 @@ def read_mesh(path: PathLike) -> MeshData:
     if ext not in _READERS:
         raise _fail_read(p, f"unsupported file extension {ext or '(none)'!r} (supported: "
                             f"{', '.join(SUPPORTED_FORMATS)})")
-    if not p.exists():
-        raise _fail_read(p, "file not found")
-    if p.is_dir():
-        raise _fail_read(p, "is a directory, not a mesh file")
+    check_input_file(p)
     try:
         mesh = _READERS[ext](p)
     except _Bad as exc:
@@ -671,9 +813,7 @@ def write_mesh(
     if ext not in _READERS:
         raise MeshRepairError(f"cannot write '{p}': unsupported file extension "
                               f"{ext or '(none)'!r} (supported: {', '.join(SUPPORTED_FORMATS)})")
-    if not overwrite and p.exists():
-        raise MeshRepairError(f"cannot write '{p}': file exists (pass overwrite=True to "
-                              "replace it)")
+    check_writable(p, overwrite=overwrite)
     Vf = _as_vertex_array(V, f"cannot write '{p}'")
     Fi = _as_face_array(F, f"cannot write '{p}'")
     if Fi.size == 0:
@@ -682,6 +822,8 @@ def write_mesh(
         raise MeshRepairError(f"cannot write '{p}': V must have shape (nV, 3), got {Vf.shape}")
     if Fi.ndim != 2 or Fi.shape[1] != 3:
         raise MeshRepairError(f"cannot write '{p}': F must have shape (nF, 3), got {Fi.shape}")
+    if len(Vf) == 0:
+        raise MeshRepairError(f"cannot write '{p}': the mesh has no vertices (nothing to write)")
     bad = ~np.isfinite(Vf).all(axis=1)
     if bad.any():
         idx = np.flatnonzero(bad)
@@ -704,36 +846,23 @@ def write_mesh(
         if vertex_attributes:
             logger.warning("%s: vertex attributes %s are not stored in %s files (use PLY)", p,
                            sorted(vertex_attributes), ext)
-    if not p.parent.is_dir():
-        raise MeshRepairError(f"cannot write '{p}': directory '{p.parent}' does not exist")
-
-    tmp = p.parent / f".{p.name}.{os.getpid()}.{secrets.token_hex(4)}.tmp"
-    try:
-        fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL | getattr(os, "O_BINARY", 0),
-                     0o666)
-        with os.fdopen(fd, "wb") as fh:
-            if ext == ".ply":
-                _write_ply(fh, Vf, Fi, attrs, binary)
-            elif ext == ".stl":
-                _write_stl(fh, Vf, Fi, binary, p)
-            elif ext == ".obj":
-                fh.write(b"# written by meshrepair\n")
-                if nV:
-                    np.savetxt(fh, Vf, fmt="v %.17g %.17g %.17g")
-                if len(Fi):
-                    np.savetxt(fh, Fi + 1, fmt="f %d %d %d")
-            else:  # .off
-                fh.write(f"OFF\n{nV} {len(Fi)} 0\n".encode("ascii"))
-                if nV:
-                    np.savetxt(fh, Vf, fmt="%.17g %.17g %.17g")
-                if len(Fi):
-                    np.savetxt(fh, Fi, fmt="3 %d %d %d")
-        os.replace(tmp, p)
-    except OSError as exc:
-        raise MeshRepairError(f"cannot write '{p}': {exc.strerror or exc}") from None
-    finally:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
+    with atomic_write(p, "wb", overwrite=overwrite) as fh:
+        if ext == ".ply":
+            _write_ply(fh, Vf, Fi, attrs, binary)
+        elif ext == ".stl":
+            _write_stl(fh, Vf, Fi, binary, p)
+        elif ext == ".obj":
+            fh.write(b"# written by meshrepair\n")
+            if nV:
+                np.savetxt(fh, Vf, fmt="v %.17g %.17g %.17g")
+            if len(Fi):
+                np.savetxt(fh, Fi + 1, fmt="f %d %d %d")
+        else:  # .off
+            fh.write(f"OFF\n{nV} {len(Fi)} 0\n".encode("ascii"))
+            if nV:
+                np.savetxt(fh, Vf, fmt="%.17g %.17g %.17g")
+            if len(Fi):
+                np.savetxt(fh, Fi, fmt="3 %d %d %d")
     logger.debug("wrote %s: %d vertices, %d faces", p, nV, len(Fi))
     return p
 
@@ -895,8 +1024,7 @@ def read_vertex_mask(
 
     p = Path(path_or_array)
     src = f"vertex mask '{p}'"
-    if not p.is_file():
-        raise MeshRepairError(f"cannot read '{p}': file not found")
+    check_input_file(p)
     ext = _suffix(p)
     if ext == ".ply":
         try:
@@ -940,6 +1068,8 @@ def read_vertex_mask(
         text = _read_text(p)
     except _Bad as exc:
         raise _fail_read(p, str(exc)) from None
+    except OSError as exc:
+        raise _fail_read(p, exc.strerror or str(exc)) from None
     tokens = " ".join(ln.split("#", 1)[0] for ln in text.splitlines()).split()
     try:
         vals = np.array(tokens, dtype=np.int64)

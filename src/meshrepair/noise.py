@@ -31,14 +31,20 @@ def add_noise(V: np.ndarray, F: np.ndarray, gamma: float, *, direction: str = "n
     -------
     (nV, 3) float64, a new array.
     """
-    if not (np.isfinite(gamma) and gamma >= 0):
-        raise MeshRepairError(f"gamma must be a finite number >= 0, got {gamma}")
+    from .options import check_int, check_number
+    from .validate import check_arrays
+
+    gamma = check_number("gamma", gamma, low=0) + 0.0  # -0.0 -> 0.0 (numpy refuses scale -0)
+    if seed is not None and not isinstance(seed, np.random.SeedSequence):
+        seed = check_int("seed", seed, low=0)
     if direction not in ("normal", "random"):
         raise MeshRepairError(f"direction must be 'normal' or 'random', got {direction!r}")
-    V = np.asarray(V, dtype=np.float64)
-    F = np.asarray(F, dtype=np.int64)
+    V, F = check_arrays(V, F, name="add_noise mesh")
     rng = np.random.default_rng(seed)
     sigma = gamma * mean_edge_length(V, F)
+    if not np.isfinite(sigma):
+        raise MeshRepairError(f"the mean edge length of the mesh overflows ({sigma}); rescale "
+                              "the coordinates first")
     eta = rng.normal(0.0, sigma, size=len(V))
     if direction == "normal":
         d = vertex_normals(V, F)

@@ -17,6 +17,10 @@ Kinect scan; measured in docs/parameters.md). The supported region is ``C_L`` di
 ``rings`` vertex rings (a crease moves by a few edges between the noisy input and the result):
 an edge is in the region when both its vertices are. Outside it the schedule uses edge-Willmore
 only (the smooth prior), inside it the paper's robust + feature stages.
+
+On a coarse mesh a whole crease network has fewer than ``L`` edges (a 12-triangle cube's is one
+chain of 12), so the length asked of a chain is ``min(L, ⌈f·n_E⌉)`` with ``f = CHAIN_FRACTION``:
+only meshes under ``L / f = 1,500`` edges (about 500 vertices) ask less than ``L``.
 """
 
 from __future__ import annotations
@@ -28,6 +32,7 @@ from . import _kernels as _k
 from .topology import Topology
 
 MIN_CHAIN = 30
+CHAIN_FRACTION = 0.02
 RINGS = 2
 FLAT_RINGS = 0
 FLAT_ANGLE = 5.0
@@ -76,7 +81,8 @@ def crease_support(topo: Topology, N: np.ndarray, *, th: float = 30.0,
     -------
     (nE,) bool
     """
-    chains = long_chains(topo, creased_edges(topo, N, th), int(min_chain))
+    L = min(int(min_chain), max(1, int(np.ceil(CHAIN_FRACTION * topo.n_edges))))
+    chains = long_chains(topo, creased_edges(topo, N, th), L)
     nV = topo.n_vertices
     act = np.zeros(nV, bool)
     act[topo.edges[chains].ravel()] = True

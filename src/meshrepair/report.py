@@ -310,6 +310,7 @@ def write_report(
     sharp_mask: np.ndarray | None = None,
     output_attributes: Mapping[str, np.ndarray] | None = None,
     face_budget: int | None = None,
+    overwrite: bool = True,
 ) -> Path:
     """Write a self-contained HTML report (images and the 3-D viewer embedded, no external
     files, opens offline).
@@ -359,6 +360,8 @@ def write_report(
         Per-vertex values of the output offered as colourings in the viewer.
     face_budget : int, optional
         Faces per viewer pane above which a decimated copy is shown.
+    overwrite : bool
+        If False, refuse to replace an existing file. The page is written atomically.
 
     Returns
     -------
@@ -467,11 +470,11 @@ def write_report(
             "",
         ]
     )
-    from .viewer import write_text_atomic
+    from .atomic import atomic_write
 
     p = Path(path)
-    p.parent.mkdir(parents=True, exist_ok=True)
-    write_text_atomic(p, page)
+    with atomic_write(p, "w", overwrite=overwrite, make_parents=True) as fh:
+        fh.write(page)
     log.info("wrote report %s (%.1f kB)", p, len(page) / 1024)
     return p
 

@@ -27,6 +27,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
+from . import _fused
 from . import _kernels as _k
 from ._memory import heap_allocations
 from .fidelity import prox_group_l1, tangential_anchor
@@ -121,29 +122,43 @@ class SolverOptions:
     huber_delta: float = 0.0
 
     def validate(self) -> None:
+        """Check every option (finite, in range, known choice); MeshRepairError naming it."""
         from .errors import MeshRepairError
+        from .options import check_bool, check_choice, check_int, check_number
 
-        if self.inner_solver not in INNER_SOLVERS:
-            raise MeshRepairError(f"inner_solver must be one of {INNER_SOLVERS}, "
-                                  f"got {self.inner_solver!r}")
-        if self.n_solver not in N_SOLVERS:
-            raise MeshRepairError(f"n_solver must be one of {N_SOLVERS}, got {self.n_solver!r}")
-        if not self.lam >= 0 or not np.isfinite(self.lam):
-            raise MeshRepairError(f"lam must be a finite number >= 0, got {self.lam}")
-        if not 0 < self.th < 180:
+        check_choice("inner_solver", self.inner_solver, INNER_SOLVERS)
+        check_choice("n_solver", self.n_solver, N_SOLVERS)
+        check_choice("mask_source", self.mask_source, ("N", "V"))
+        check_number("lam", self.lam, low=0)
+        if not (isinstance(self.th, (int, float, np.number)) and 0 < self.th < 180):
             raise MeshRepairError(f"th must be an angle in (0, 180) degrees, got {self.th}")
-        if not (np.isfinite(self.huber_delta) and self.huber_delta >= 0):
-            raise MeshRepairError(f"huber_delta must be a finite number >= 0, got "
-                                  f"{self.huber_delta}")
+        check_number("huber_delta", self.huber_delta, low=0)
+        check_number("willmore_weight", self.willmore_weight, low=0)
+        check_number("tol", self.tol, low=0, low_open=True)
+        check_int("inner_iters", self.inner_iters, low=1)
+        check_number("n_rtol", self.n_rtol, low=0, high=1, low_open=True, high_open=True)
+        check_int("mask_update_every", self.mask_update_every, low=0)
+        check_int("min_feature_edges", self.min_feature_edges, low=1)
+        check_bool("precondition", self.precondition)
         if not self.stages:
             raise MeshRepairError("at least one stage is needed")
         for s in self.stages:
+            if not isinstance(s, Stage):
+                raise MeshRepairError(f"stages must be Stage objects, got {type(s).__name__}")
             if s.mask not in MASK_MODES:
                 raise MeshRepairError(f"stage mask must be one of {MASK_MODES}, got {s.mask!r}")
-            if not s.eps > 1:
+            if not (isinstance(s.eps, (int, float, np.number)) and s.eps > 1
+                    and np.isfinite(s.eps)):
                 raise MeshRepairError(f"stage eps must be > 1 (rule (24)), got {s.eps}")
-            if not (s.a > 0 and s.beta2_ratio > 0 and s.max_iter >= 0):
-                raise MeshRepairError(f"invalid stage {s}")
+            try:
+                check_number("stage a", s.a, low=0, low_open=True)
+                check_number("stage beta2_ratio", s.beta2_ratio, low=0, low_open=True)
+                check_int("stage max_iter", s.max_iter, low=0)
+                check_number("stage switch_tol", s.switch_tol, low=0)
+                check_int("stage min_iter", s.min_iter, low=0)
+                check_number("stage relax", s.relax, low=0, high=1)
+            except MeshRepairError as exc:
+                raise MeshRepairError(f"invalid stage {s.name!r}: {exc}") from None
 
 
 @dataclass
@@ -333,6 +348,7 @@ class ADMMSolver:
                 last = si == len(o.stages) - 1
                 src = N if o.mask_source == "N" else _k.face_normals(V, F)
                 sharp = self._mask(stage.mask, src, given_mask)
+                sh = sharp[self.ie]  # the mask on interior edges, re-gathered when it changes
                 beta1 = stage.beta1 if (sharp.any() or stage.mask == "all") else max(
                     stage.beta1, stage.eps * 2.0 * o.willmore_weight)
                 if sharp.any() and beta1 <= stage.a:
@@ -345,7 +361,7 @@ class ADMMSolver:
                             and j % o.mask_update_every == 0):
                         src = N if o.mask_source == "N" else _k.face_normals(V, F)
                         sharp = self._mask("adaptive", src, given_mask)
-                    sh = sharp[self.ie]
+                        sh = sharp[self.ie]
                     # (17) t-update
                     DN = _k.grad_edges(N, l, fa, fb)
                     mixed = stage.flat_a > 0 and self._flat_int is not None
@@ -379,13 +395,12 @@ class ADMMSolver:
                         Vn = self.relaxer.step(Vn, sharp, stage.relax)
                     # (20)-(21) multipliers (D with the lengths of V^(k), as in the N-update)
                     res_t = _k.update_rho1(t, N, l, fa, fb, rho1, beta1)
-                    Nv = _k.face_normals(Vn, F)
-                    res_n = _k.update_rho2(N, Nv, rho2, beta2)
-                    rel = np.sqrt(_k.sqdist(Vn, V) / max(_k.sqdist(V, np.zeros_like(V)), 1e-300))
+                    Nv, res_n = _fused.normals_update_rho2(Vn, F, N, rho2, beta2)
+                    rel = _fused.rel_change(Vn, V)
                     V = Vn
-                    l = _k.edge_lengths(V, E_int)
                     k += 1
-                    reg = _k.reg_energy(Nv, l, fa, fb, sh, stage.a, o.willmore_weight)
+                    l, reg = _fused.lengths_reg_energy(V, E_int, Nv, fa, fb, sh, stage.a,
+                                                       o.willmore_weight)
                     if mixed:  # flat-TV edges: replace their Willmore value by the MC value
                         f = np.flatnonzero(fl & ~sh)
                         tf = l[f, None] * (Nv[fa[f]] - Nv[fb[f]])

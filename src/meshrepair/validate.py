@@ -324,6 +324,24 @@ def _boundary_loop_count(bedges: np.ndarray) -> int:
     return int(union_find(len(verts), local[:, 0], local[:, 1]).max()) + 1
 
 
+def check_arrays(V, F, *, name: str = "mesh") -> tuple[np.ndarray, np.ndarray]:
+    """Light check for functions that need no topology (e.g. :func:`meshrepair.add_noise`):
+    float64/int64 copies of ``(V, F)`` with shapes (nV, 3)/(nF, 3), finite vertices and indices
+    in range; MeshRepairError otherwise."""
+    from .io import as_arrays
+
+    V, F = as_arrays(V, F)
+    _check_shapes(V, F, name)
+    bad = ~np.isfinite(V).all(axis=1)
+    if bad.any():
+        raise MeshRepairError(f"{name}: {int(bad.sum())} vertices have NaN or infinite "
+                              f"coordinates (first: {_first(np.flatnonzero(bad))})")
+    if F.min() < 0 or F.max() >= len(V):
+        raise MeshRepairError(f"{name}: face indices out of range [0, {len(V) - 1}] (got "
+                              f"[{int(F.min())}, {int(F.max())}])")
+    return V, F
+
+
 def check_mesh(V: np.ndarray, F: np.ndarray, *, name: str = "mesh",
                allow_degenerate: bool = False) -> MeshReport:
     """Validate a triangle mesh; refuse unusable input, warn about suspicious input.

@@ -14,7 +14,6 @@ mirror image of the region's counterpart across the mesh's symmetry plane)
 from __future__ import annotations
 
 import argparse
-import json
 import logging
 import time
 from pathlib import Path
@@ -35,9 +34,9 @@ def read_face_selection(path: str | Path, n_faces: int) -> np.ndarray:
     -------
     (k,) int64, sorted unique face indices in ``[0, n_faces)``
     """
-    p = Path(path)
-    if not p.is_file():
-        raise MeshRepairError(f"region file {str(p)!r} does not exist; check the path")
+    from ..io import check_input_file
+
+    p = check_input_file(path, "region ")
     try:
         text = p.read_text(encoding="utf-8")
     except (OSError, UnicodeDecodeError) as exc:
@@ -67,16 +66,11 @@ def _selection(path: str, V: np.ndarray, F: np.ndarray) -> dict:
     return {"region": read_face_selection(path, len(F))}
 
 
-def _check_output(out: str, inputs: list[str | None], force: bool) -> Path:
-    from .common import output_path
-
-    return output_path(out, inputs, force=force)
-
-
 def run_complete(args: argparse.Namespace) -> int:
     """Handler of ``meshrepair complete``; returns the exit code."""
     from ..complete import complete, extract_patch
     from ..io import read_mesh, write_mesh
+    from .common import run_outputs, write_json_log
 
     paths = list(args.paths)
     if args.mirror:
@@ -92,10 +86,9 @@ def run_complete(args: argparse.Namespace) -> int:
             raise MeshRepairError("give IN TEMPLATE OUT (or IN OUT --mirror for symmetric "
                                   f"completion), got {len(paths) + 1} paths")
         args.template, args.output = paths
-    out = _check_output(args.output, [args.input, args.template, args.region, args.transform,
-                                      args.template_region, args.log], args.force)
-    if args.log is not None and Path(args.log).suffix.lower() != ".json":
-        raise MeshRepairError(f"--log {args.log!r} must be a .json file")
+    out, log_path, report_path = run_outputs(
+        args, [args.input, args.template, args.region, args.transform, args.template_region],
+        output=args.output)
     t0 = time.perf_counter()
     mesh = read_mesh(args.input)
     tmesh = read_mesh(args.template) if args.template is not None else None
@@ -136,9 +129,9 @@ def run_complete(args: argparse.Namespace) -> int:
         tmpl = np.zeros(nV, np.uint8)
         tmpl[res.template_vertices] = 1
         attrs = {"m_v": res.M_V.astype(np.float32), "strip": strip, "template": tmpl}
-    write_mesh(out, res.V, res.F, vertex_attributes=attrs, overwrite=True)
+    write_mesh(out, res.V, res.F, vertex_attributes=attrs, overwrite=args.force)
     c = res.correspondence
-    if args.log is not None:
+    if log_path is not None:
         corr = {k: (v.tolist() if isinstance(v, np.ndarray) else v) for k, v in c.items()}
         run = {
             "history": res.history,
@@ -153,7 +146,7 @@ def run_complete(args: argparse.Namespace) -> int:
             "alignment": res.alignment,
             "symmetry": _jsonable(res.symmetry),
         }
-        Path(args.log).write_text(json.dumps(run, indent=1), encoding="utf-8")
+        write_json_log(log_path, run, force=args.force)
     print(f"wrote {out}: {len(res.V)} vertices, {len(res.F)} faces; seam {c['n_seam']} vertices "
           f"(hole {c['n_hole']}, template {c['n_template']}), boundary RMS {c['rms_before']:.3g} "
           f"-> {c['rms_after']:.3g}, {res.iterations} iterations "
@@ -165,7 +158,7 @@ def run_complete(args: argparse.Namespace) -> int:
     tmpl_v[res.template_vertices] = True
     a = res.alignment
     write_run_report(
-        args.report, title=f"meshrepair complete {Path(args.input).name}",
+        report_path, force=args.force, title=f"meshrepair complete {Path(args.input).name}",
         highlight=tmpl_v[res.F].all(axis=1), highlight_label="template faces",
         sharp_mask=res.M_E,
         input_mesh=(mesh.V, mesh.F), output_mesh=(res.V, res.F),

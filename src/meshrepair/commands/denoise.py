@@ -11,16 +11,23 @@ from pathlib import Path
 
 import numpy as np
 
-from .common import ProgressBar, output_path
+from .common import (
+    ProgressBar,
+    make_folder,
+    output_folder,
+    output_path,
+    run_outputs,
+    write_json_log,
+)
 
 log = logging.getLogger(__name__)
 
 
-def _write_history(path: str | None, result, extra: dict) -> None:
-    if not path:
+def _write_history(path: Path | None, result, extra: dict, force: bool) -> None:
+    if path is None:
         return
     data = {"history": result.history, "parameters": result.params, **extra}
-    Path(path).write_text(json.dumps(data, indent=1, default=float))
+    write_json_log(path, data, force=force)
 
 
 def run_denoise(args: argparse.Namespace) -> int:
@@ -28,7 +35,7 @@ def run_denoise(args: argparse.Namespace) -> int:
     from ..io import read_mesh, write_mesh
     from ..solver import StopRequested
 
-    out = output_path(args.output, [args.input], force=args.force)
+    out, log_path, report_path = run_outputs(args, [args.input], output=args.output)
     m = read_mesh(args.input)
     total = (args.robust_iters if args.robust_iters is not None else 40) + args.feature_iters
     bar = ProgressBar(total, "denoise", enabled=not args.quiet)
@@ -57,24 +64,24 @@ def run_denoise(args: argparse.Namespace) -> int:
         sharp_v = np.zeros(len(r.V), np.uint8)
         sharp_v[r.edges[r.M_E].ravel()] = 1
         attrs["sharp"] = sharp_v
-    write_mesh(out, r.V, r.F, vertex_attributes=attrs or None)
-    _write_history(args.log, r, {"seconds": dt})
+    write_mesh(out, r.V, r.F, vertex_attributes=attrs or None, overwrite=args.force)
+    _write_history(log_path, r, {"seconds": dt}, args.force)
     print(f"denoised {len(r.V)} vertices in {r.iterations} iterations ({dt:.2f} s, "
           f"{r.stop_reason}); noise estimate gamma={r.noise_estimate:.3f}, lambda="
           f"{r.params['lam']:.3g}, sharp edges {int(r.M_E.sum())}/{len(r.M_E)}")
     if r.stop_reason == "interrupted":
         print("interrupted: wrote the current iterate", file=sys.stderr)
     print(f"wrote {out}")
-    if args.report:
+    if report_path is not None:
         from ..report import write_report
 
-        write_report(args.report, title=f"meshrepair denoise {Path(args.input).name}",
+        write_report(report_path, title=f"meshrepair denoise {Path(args.input).name}",
                      input_mesh=(m.V, m.F), output_mesh=(r.V, r.F),
                      masks={"M_E": r.M_E}, history=r.history, parameters=r.params,
                      sharp_mask=r.M_E,
                      metrics={"noise estimate": r.noise_estimate, "iterations": r.iterations},
-                     timings={"total s": dt})
-        print(f"wrote {args.report}")
+                     timings={"total s": dt}, overwrite=args.force)
+        print(f"wrote {report_path}")
     return 0
 
 
@@ -85,7 +92,7 @@ def run_noise(args: argparse.Namespace) -> int:
     out = output_path(args.output, [args.input], force=args.force)
     m = read_mesh(args.input)
     Vn = add_noise(m.V, m.F, args.gamma, direction=args.direction, seed=args.seed)
-    write_mesh(out, Vn, m.F)
+    write_mesh(out, Vn, m.F, overwrite=args.force)
     print(f"added noise gamma={args.gamma} ({args.direction}, seed {args.seed}); wrote {out}")
     return 0
 
@@ -128,11 +135,12 @@ def run_demo(args: argparse.Namespace) -> int:
     from ..metrics import msae, vertex_error
 
     data = files("meshrepair") / "data"
+    names = ["fandisk_denoised.ply"] + ([] if args.no_render else ["fandisk_demo.png"])
+    out, *rest = output_folder(args.outdir, names, [], force=args.force)
+    png = rest[0] if rest else None
     noisy = read_mesh(str(data / "fandisk_noisy.ply"))
     truth = read_mesh(str(data / "fandisk.ply"))
-    outdir = Path(args.outdir)
-    outdir.mkdir(parents=True, exist_ok=True)
-    out = outdir / "fandisk_denoised.ply"
+    make_folder(args.outdir)
     print("meshrepair demo: feature-aware denoising of the fandisk CAD part")
     print("  input: published noisy fandisk (Gaussian noise, 0.3 mean edge lengths), "
           f"{len(noisy.V)} vertices")
@@ -141,7 +149,7 @@ def run_demo(args: argparse.Namespace) -> int:
     r = denoise(noisy.V, noisy.F, callback=bar)
     bar.close()
     dt = time.perf_counter() - t0
-    write_mesh(out, r.V, r.F)
+    write_mesh(out, r.V, r.F, overwrite=args.force)
     m0, m1 = msae(noisy.V, truth.V, truth.F), msae(r.V, truth.V, truth.F)
     e0, e1 = vertex_error(noisy.V, truth.V), vertex_error(r.V, truth.V)
     print(f"  {'':10s} {'MSAE (deg^2)':>14s} {'E_V':>12s}")
@@ -153,11 +161,11 @@ def run_demo(args: argparse.Namespace) -> int:
         try:
             from ..render import compare_figure
 
-            png = outdir / "fandisk_demo.png"
             compare_figure([(noisy.V, noisy.F), (r.V, r.F), (truth.V, truth.F)],
                            ["noisy", "meshrepair", "ground truth"],
                            metrics=[f"MSAE {m0:.1f}", f"MSAE {m1:.1f}", ""],
-                           out_path=png, azimuth=35, elevation=25, width=400, height=400)
+                           out_path=png, azimuth=35, elevation=25, width=400, height=400,
+                           overwrite=args.force)
             print(f"  wrote {png}")
         except Exception as exc:  # the picture is a bonus; never fail the demo on it
             log.warning("could not render the demo picture: %s", exc)
@@ -174,18 +182,24 @@ def register(subparsers) -> None:
     p.add_argument("output", help="result mesh (.ply recommended); never the input file")
     p.add_argument("--lam", type=float, default=None,
                    help="fidelity weight lambda (default: from the estimated noise level)")
-    p.add_argument("--th", type=float, default=30.0, help="sharp-edge dihedral threshold, degrees")
+    p.add_argument("--th", type=float, default=30.0, metavar="DEG",
+                   help="sharp-edge dihedral threshold in degrees, in (0, 180)")
     p.add_argument("--robust-iters", type=int, default=None,
                    help="cap of the robust stage (default: 10-40 from the estimated noise)")
-    p.add_argument("--feature-iters", type=int, default=60, help="cap of the feature stage")
-    p.add_argument("--tol", type=float, default=1e-6, help="stopping rule (35) tolerance")
+    p.add_argument("--feature-iters", type=int, default=60, metavar="N",
+                   help="cap of the feature stage (iterations, >= 0)")
+    p.add_argument("--tol", type=float, default=1e-6,
+                   help="tolerance of the stopping rule (35) on the relative change, > 0")
     p.add_argument("--inner-solver", default="armijo",
-                   choices=["armijo", "gd", "heavy_ball", "lbfgs", "bfgs"])
-    p.add_argument("--n-solver", default="auto", choices=["auto", "cg", "direct"])
+                   choices=["armijo", "gd", "heavy_ball", "lbfgs", "bfgs"],
+                   help="solver of the V-subproblem (26)")
+    p.add_argument("--n-solver", default="auto", choices=["auto", "cg", "direct"],
+                   help="N-subproblem (25) solver: block PCG, sparse direct, or chosen by size")
     p.add_argument("--save-mask", action="store_true",
                    help="store a per-vertex 'sharp' attribute (vertices on sharp edges) in the PLY")
-    p.add_argument("--log", help="write the iteration history and parameters as JSON")
-    p.add_argument("--report", help="write a self-contained HTML report")
+    p.add_argument("--log", metavar="RUN.json",
+                   help="write the iteration history and parameters as JSON")
+    p.add_argument("--report", metavar="OUT.html", help="write a self-contained HTML report")
     p.add_argument("--save-on-interrupt", action="store_true",
                    help="on Ctrl-C, write the current iterate instead of nothing")
     p.add_argument("--force", action="store_true", help="overwrite OUTPUT if it exists")
@@ -194,26 +208,31 @@ def register(subparsers) -> None:
 
     p = subparsers.add_parser("noise", help="add the paper's noise model (32) to a mesh",
                               description="V0 = V + eta*d, eta ~ N(0, (gamma*mean edge)^2).")
-    p.add_argument("input")
-    p.add_argument("output")
-    p.add_argument("--gamma", type=float, default=0.3, help="noise level in mean edge lengths")
-    p.add_argument("--direction", choices=["normal", "random"], default="normal")
-    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("input", help="clean mesh (.ply .obj .off .stl)")
+    p.add_argument("output", help="noisy mesh to write; never the input file")
+    p.add_argument("--gamma", type=float, default=0.3,
+                   help="noise level in mean edge lengths, >= 0")
+    p.add_argument("--direction", choices=["normal", "random"], default="normal",
+                   help="displace along the vertex normals or in random directions")
+    p.add_argument("--seed", type=int, default=0, help="random seed")
     p.add_argument("--force", action="store_true", help="overwrite OUTPUT if it exists")
     p.set_defaults(func=run_noise)
 
     p = subparsers.add_parser("metrics", help="MSAE, E_V and surface distances to a reference",
                               description="Compare RESULT with REFERENCE. MSAE (33) and E_V (34) "
                                           "need the same connectivity; distances do not.")
-    p.add_argument("result")
-    p.add_argument("reference")
-    p.add_argument("--json", action="store_true", help="print JSON")
+    p.add_argument("result", help="mesh to evaluate (e.g. a denoised mesh)")
+    p.add_argument("reference", help="ground-truth mesh (same connectivity for MSAE and E_V)")
+    p.add_argument("--json", action="store_true", help="print JSON instead of a table")
     p.set_defaults(func=run_metrics)
 
     p = subparsers.add_parser("demo", help="denoise the bundled noisy fandisk and print errors",
                               description="Runs the default denoiser on a bundled noisy CAD part "
                                           "and prints MSAE/E_V before and after.")
-    p.add_argument("--outdir", default="meshrepair-demo", help="where to write the results")
+    p.add_argument("--outdir", default="meshrepair-demo",
+                   help="folder for the results (created if missing; default: %(default)s)")
     p.add_argument("--no-render", action="store_true", help="skip the PNG figure")
+    p.add_argument("--force", action="store_true",
+                   help="overwrite the results of an earlier run in --outdir")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
     p.set_defaults(func=run_demo)

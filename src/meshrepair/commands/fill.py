@@ -14,7 +14,6 @@ The output is written with :func:`meshrepair.io.write_mesh`; a PLY output gets a
 from __future__ import annotations
 
 import argparse
-import json
 import logging
 from pathlib import Path
 
@@ -35,17 +34,12 @@ def _floats(text: str, n: int, what: str) -> list[float]:
     return vals
 
 
-def _check_paths(inp: str, out: str, force: bool) -> Path:
-    from .common import output_path
-
-    return output_path(out, [inp], force=force)
-
-
-def _write(out: Path, res, log_path: str | None, extra: dict) -> None:
+def _write(out: Path, res, log_path: Path | None, extra: dict, force: bool) -> None:
     from ..io import write_mesh
+    from .common import write_json_log
 
-    write_mesh(out, res.V, res.F, vertex_attributes={"filled": res.filled_mask}, overwrite=True)
-    if log_path:
+    write_mesh(out, res.V, res.F, vertex_attributes={"filled": res.filled_mask}, overwrite=force)
+    if log_path is not None:
         data = {
             "history": res.history,
             "parameters": {k: (v if isinstance(v, (int, float, str, bool, type(None), list))
@@ -57,10 +51,10 @@ def _write(out: Path, res, log_path: str | None, extra: dict) -> None:
                         "new faces": int(len(res.new_faces))},
             "holes": [h.as_dict() for h in res.holes],
         }
-        Path(log_path).write_text(json.dumps(data, indent=1, default=float), encoding="utf-8")
+        write_json_log(log_path, data, force=force)
 
 
-def _report(args: argparse.Namespace, res, m) -> None:
+def _report(args: argparse.Namespace, res, m, report_path: Path | None) -> None:
     from .common import write_run_report
 
     if not args.report:
@@ -71,7 +65,7 @@ def _report(args: argparse.Namespace, res, m) -> None:
     highlight[res.new_faces] = True
     regions, details = hole_regions(res.V, res.F, res.holes)
     write_run_report(
-        args.report, title=f"meshrepair {args.command} {Path(args.input).name}",
+        report_path, force=args.force, title=f"meshrepair {args.command} {Path(args.input).name}",
         holes=[h.as_dict() for h in res.holes], highlight=highlight,
         highlight_label="inpainted faces" if args.command == "inpaint" else "filled faces",
         regions=regions, region_details=details, sharp_mask=res.M_E,
@@ -88,10 +82,12 @@ def run_fill(args: argparse.Namespace) -> int:
     from ..fill import fill_holes
     from ..holes import find_holes
     from ..io import read_mesh
+    from .common import run_outputs
 
     if args.output is None and not args.list:
         raise MeshRepairError("missing output file: give IN OUT (or --list to only list holes)")
-    out = None if args.list else _check_paths(args.input, args.output, args.force)
+    paths = (None, None, None) if args.list else run_outputs(args, [args.input],
+                                                              output=args.output)
     m = read_mesh(args.input)
     if args.list:
         holes = find_holes(m.V, m.F)
@@ -100,7 +96,7 @@ def run_fill(args: argparse.Namespace) -> int:
             print(f"  hole {h.index}: {h.n_boundary} boundary edges, length {h.length:.6g}"
                   f"{', pinched' if h.pinched else ''}")
         return 0
-    return _solve_and_write(args, m, out, "fill", lambda cb, hp: fill_holes(
+    return _solve_and_write(args, m, paths, "fill", lambda cb, hp: fill_holes(
         m.V, m.F, max_hole_size=args.max_hole_size, keep_border=args.keep_border,
         exclude=args.exclude or (), holes=args.holes, denoise=args.denoise,
         initial=args.initial, refine=not args.no_refine, callback=cb, progress=hp))
@@ -110,8 +106,9 @@ def run_inpaint(args: argparse.Namespace) -> int:
     """Handler of ``meshrepair inpaint``; returns the exit code."""
     from ..fill import inpaint
     from ..io import read_mesh, read_vertex_mask
+    from .common import run_outputs
 
-    out = _check_paths(args.input, args.output, args.force)
+    paths = run_outputs(args, [args.input, args.region], output=args.output)
     m = read_mesh(args.input)
     if args.region is not None:
         region = read_vertex_mask(args.region, len(m.V), attribute=args.attribute)
@@ -121,16 +118,18 @@ def run_inpaint(args: argparse.Namespace) -> int:
     else:
         x0, y0, z0, x1, y1, z1 = _floats(args.box, 6, "--box")
         region = ("box", (x0, y0, z0), (x1, y1, z1))
-    return _solve_and_write(args, m, out, "inpaint", lambda cb, hp: inpaint(
+    return _solve_and_write(args, m, paths, "inpaint", lambda cb, hp: inpaint(
         m.V, m.F, region, denoise=args.denoise, initial=args.initial,
         refine=not args.no_refine, callback=cb, progress=hp))
 
 
-def _solve_and_write(args: argparse.Namespace, m, out: Path, desc: str, solve) -> int:
+def _solve_and_write(args: argparse.Namespace, m, paths: tuple, desc: str, solve) -> int:
     """Run ``solve(callback, hole_progress)`` under progress bars (over holes, then over the
     solve's iterations; none with ``--quiet``), print the per-hole summary, write OUT (and
-    ``--log``/``--report``); returns the exit code."""
+    ``--log``/``--report``, ``paths`` checked by ``run_outputs``); returns the exit code."""
     from .common import ProgressBar
+
+    out, log_path, report_path = paths
 
     holes_bar = _HoleBar(f"{desc}: holes", enabled=not args.quiet)
     bar = None
@@ -149,9 +148,9 @@ def _solve_and_write(args: argparse.Namespace, m, out: Path, desc: str, solve) -
         if bar is not None:
             bar.close()
     print(res.summary())
-    _write(out, res, args.log, {"input": args.input})
+    _write(out, res, log_path, {"input": args.input}, args.force)
     print(f"wrote {out} ({len(res.V)} vertices, {len(res.F)} faces, {res.timings['total']:.2f} s)")
-    _report(args, res, m)
+    _report(args, res, m, report_path)
     return 0
 
 

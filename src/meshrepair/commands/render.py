@@ -41,8 +41,13 @@ class LoadedMesh:
 def load_mesh(path: str | os.PathLike) -> LoadedMesh:
     """Read a triangle mesh with :func:`meshrepair.io.read_mesh` (trimesh if that is missing)."""
     p = Path(path)
-    if not p.is_file():
-        raise MeshRepairError(f"mesh file {str(p)!r} does not exist; check the path")
+    try:
+        from ..io import check_input_file
+
+        check_input_file(p)
+    except ImportError:  # meshrepair.io not available
+        if not p.is_file():
+            raise MeshRepairError(f"mesh file {str(p)!r} does not exist; check the path") from None
     try:
         from ..io import read_mesh
     except ImportError:  # meshrepair.io not available: fall back to trimesh
@@ -62,12 +67,13 @@ def load_mesh(path: str | os.PathLike) -> LoadedMesh:
     return LoadedMesh(m.vertices, m.faces, attrs)
 
 
-def check_output_path(out: str | os.PathLike, inputs: list, suffixes: tuple[str, ...]) -> Path:
-    """Refuse to overwrite an input file and require one of ``suffixes`` (pictures and reports
-    are regenerated freely, so an existing non-input output is replaced)."""
+def check_output_path(out: str | os.PathLike, inputs: list, suffixes: tuple[str, ...],
+                      force: bool = False) -> Path:
+    """The common output rule (:func:`meshrepair.commands.common.output_path`) for pictures and
+    reports: one of ``suffixes``, never an input, an existing file only with ``force``."""
     from .common import output_path
 
-    return output_path(out, inputs, force=True, suffixes=suffixes)
+    return output_path(out, inputs, force=force, suffixes=suffixes)
 
 
 def sharp_edges(V: np.ndarray, F: np.ndarray, threshold: float = 30.0) -> np.ndarray:
@@ -91,9 +97,9 @@ def _color_options(color: str, mesh: LoadedMesh) -> dict:
     if color in ("curvature", "none"):
         return {"color_by": color}
     if color.lower().endswith(".npy"):
-        p = Path(color)
-        if not p.is_file():
-            raise MeshRepairError(f"--color file {color!r} does not exist")
+        from ..io import check_input_file
+
+        p = check_input_file(color, "--color ")
         try:
             s = np.load(p, allow_pickle=False)
         except (OSError, ValueError) as exc:
@@ -124,6 +130,7 @@ def _add_view_options(p: argparse.ArgumentParser) -> None:
                    help="dihedral angle threshold for --sharp-edges (default 30)")
     p.add_argument("--supersample", type=int, default=1, choices=(1, 2, 3),
                    help="anti-aliasing factor (default 1)")
+    p.add_argument("--force", action="store_true", help="overwrite the PNG if it exists")
     a = p.add_argument_group("aiming the camera (instead of fitting the whole mesh)")
     a.add_argument("--view-dir", default=None, metavar="DX,DY,DZ",
                    help="direction the camera looks in (replaces --azimuth/--elevation; "
@@ -228,7 +235,8 @@ def run_render(args: argparse.Namespace) -> int:
     """Handler of ``meshrepair render``; returns the exit code."""
     from ..render import render_mesh, save_png
 
-    out = check_output_path(args.output, [args.input], (".png",))
+    color_file = args.color if args.color.lower().endswith(".npy") else None
+    out = check_output_path(args.output, [args.input, color_file], (".png",), args.force)
     t0 = time.perf_counter()
     mesh = load_mesh(args.input)
     kw = _color_options(args.color, mesh)
@@ -242,7 +250,7 @@ def run_render(args: argparse.Namespace) -> int:
         mesh.V, mesh.F, shading=args.shading,
         width=w, height=h, title=args.title, supersample=args.supersample, **kw,
     )  # fmt: skip
-    save_png(out, img)
+    save_png(out, img, overwrite=args.force)
     print(f"wrote {out} ({img.shape[1]}x{img.shape[0]}, {time.perf_counter() - t0:.2f} s)")
     return 0
 
@@ -254,7 +262,7 @@ def run_compare(args: argparse.Namespace) -> int:
     if len(args.paths) < 2:
         raise MeshRepairError("compare needs at least one mesh and the output: A [B ...] OUT.png")
     inputs, out = args.paths[:-1], args.paths[-1]
-    out = check_output_path(out, [*inputs, args.reference], (".png",))
+    out = check_output_path(out, [*inputs, args.reference], (".png",), args.force)
     if args.titles is not None and len(args.titles) != len(inputs):
         raise MeshRepairError(
             f"--titles has {len(args.titles)} entries for {len(inputs)} meshes; give one per mesh"
@@ -281,6 +289,7 @@ def run_compare(args: argparse.Namespace) -> int:
         [(m.V, m.F) for m in meshes], titles, metrics=metrics, out_path=out,
         shading=args.shading, width=w, height=h, edge_mask=edge_masks,
         supersample=args.supersample, **color, **aim_options(args, meshes[0]),
+        overwrite=args.force,
     )  # fmt: skip
     print(f"wrote {out} ({img.shape[1]}x{img.shape[0]}, {time.perf_counter() - t0:.2f} s)")
     return 0

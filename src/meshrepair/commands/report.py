@@ -26,9 +26,9 @@ def _load_log(path: str | None) -> dict:
     ``history``, ``parameters``, ``timings``, ``metrics``, ``holes`` (per-hole records)."""
     if path is None:
         return {}
-    p = Path(path)
-    if not p.is_file():
-        raise MeshRepairError(f"--log file {path!r} does not exist")
+    from ..io import check_input_file
+
+    p = check_input_file(path, "--log ")
     try:
         data = json.loads(p.read_text(encoding="utf-8"))
     except (OSError, ValueError) as exc:
@@ -69,7 +69,8 @@ def run_report(args: argparse.Namespace) -> int:
     from ..topology import boundary_loops
 
     out = check_output_path(
-        args.output, [args.result, args.input, args.reference, args.log], (".html", ".htm")
+        args.output, [args.result, args.input, args.reference, args.log], (".html", ".htm"),
+        args.force,
     )
     t0 = time.perf_counter()
     res = load_mesh(args.result)
@@ -129,6 +130,7 @@ def run_report(args: argparse.Namespace) -> int:
         image_size=args.image_size,
         holes=run.get("holes"),
         output_attributes=res.vertex_attributes,
+        overwrite=args.force,
     )
     print(f"wrote {out} ({time.perf_counter() - t0:.2f} s)")
     return 0
@@ -155,4 +157,5 @@ def register(subparsers) -> None:
                    help="dihedral angle for the sharp-edge mask M_E (default 30)")
     p.add_argument("--image-size", type=int, default=480, metavar="PX",
                    help="size of each rendered panel (default 480)")
+    p.add_argument("--force", action="store_true", help="overwrite OUTPUT if it exists")
     p.set_defaults(func=run_report)

@@ -13,7 +13,7 @@ from ..errors import MeshRepairError
 from ._geom2d import _loop_positions
 
 if HAVE_NUMBA:
-    from numba import njit
+    from .._kernels import njit  # numba.njit, without the disk cache where none is writable
 
 log = logging.getLogger(__name__)
 

@@ -11,7 +11,6 @@ from .page import (
     ViewerMesh,
     viewer_page,
     viewer_section,
-    write_text_atomic,
     write_viewer,
 )
 
@@ -22,6 +21,5 @@ __all__ = [
     "cluster_decimate",
     "viewer_page",
     "viewer_section",
-    "write_text_atomic",
     "write_viewer",
 ]

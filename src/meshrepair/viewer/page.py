@@ -279,30 +279,14 @@ def viewer_page(
             f"<h1>{t}</h1>\n{body}\n</body>\n</html>\n")
 
 
-def write_text_atomic(path: str | os.PathLike, text: str) -> Path:
-    """Write ``text`` to ``path`` through a temporary file in the same folder and a rename, so
-    a reader never sees a half-written file and a failure leaves no partial output."""
-    import tempfile
-
-    p = Path(path)
-    fd, tmp = tempfile.mkstemp(prefix=f".{p.name}.", suffix=".tmp", dir=p.parent)
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8") as fh:
-            fh.write(text)
-        umask = os.umask(0)
-        os.umask(umask)
-        os.chmod(tmp, 0o666 & ~umask)  # mkstemp makes 0600; give the usual permissions
-        os.replace(tmp, p)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
-    return p
-
-
 def write_viewer(path: str | os.PathLike, meshes: Sequence[ViewerMesh],
                  regions: Sequence[Frame] | None = None, **kw) -> Path:
     """Write :func:`viewer_page` to ``path`` (atomically); keywords as :func:`viewer_page`."""
     page = viewer_page(meshes, regions, **kw)
-    p = write_text_atomic(path, page)
+    from ..atomic import atomic_write
+
+    p = Path(path)
+    with atomic_write(p, "w") as fh:
+        fh.write(page)
     log.info("wrote viewer %s (%.1f MB)", p, len(page) / 2**20)
     return p

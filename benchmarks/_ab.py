@@ -1,0 +1,35 @@
+"""One process for paired old-vs-new timing: import meshrepair, then ``K`` default denoise calls
+on a cached benchmark mesh (``$TMPDIR/meshrepair-bench-cache/*.npz``, made by the scaling rows of
+``benchmarks/denoise.py``). Time it from outside, old and new copies alternating, e.g.::
+
+    for i in 1 2 3; do
+      PYTHONPATH=/tmp/base  /usr/bin/time -f "old %U s" python benchmarks/_ab.py M.npz 8
+      PYTHONPATH=/tmp/after /usr/bin/time -f "new %U s" python benchmarks/_ab.py M.npz 8
+    done
+
+Arguments: ``NPZ K [ITERS]`` (``ITERS`` > 0 caps the schedule at ITERS/2 robust + ITERS/2
+feature iterations; 0 or absent: the full default schedule).
+"""
+
+import os
+import sys
+
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+os.environ.setdefault("NUMBA_NUM_THREADS", "1")
+
+import numpy as np  # noqa: E402
+from threadpoolctl import threadpool_limits  # noqa: E402
+
+if __name__ == "__main__":
+    if len(sys.argv) < 3:
+        raise SystemExit(__doc__)
+    z = np.load(sys.argv[1])
+    Vn, F = z["Vn"], z["F"]
+    k = int(sys.argv[2])
+    its = int(sys.argv[3]) if len(sys.argv) > 3 else 0
+    from meshrepair import denoise
+
+    kw = {} if its == 0 else {"robust_iters": its // 2, "feature_iters": its - its // 2}
+    with threadpool_limits(1):
+        for _ in range(k):
+            denoise(Vn, F, **kw)

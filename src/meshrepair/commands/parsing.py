@@ -1,0 +1,139 @@
+"""Command-line parsing rules shared by every sub-command (argparse only, no work).
+
+* :func:`normalise_argv` lets users write options anywhere and give negative numbers as values:
+  ``--sphere -0.2,0.1,0.3,0.05`` (argparse would take ``-0.2,...`` for an option),
+  ``fill --holes 1 2 IN OUT`` (a list option would swallow the positionals), ``-v``/``-q``
+  before or after the command.
+* :func:`document_defaults` appends ``(default: X)`` to every option's help that does not state
+  its default yet, so ``--help`` shows every default.
+
+Both work from the parser's own actions, so commands added later follow the same rules.
+"""
+
+from __future__ import annotations
+
+import argparse
+import re
+
+# a value that starts with '-' but is a number or a list of numbers, e.g. -0.2 or -1,2.5e-3,4
+_NUMBERISH = re.compile(r"^-(\d|\.\d)[\d.eE+\-,\s]*$")
+_GLOBAL_ONLY = ("-v", "--verbose")
+_QUIET = ("-q", "--quiet")
+
+
+def _subparsers(parser: argparse.ArgumentParser) -> dict[str, argparse.ArgumentParser]:
+    for a in parser._actions:  # argparse keeps them here; there is no public accessor
+        if isinstance(a, argparse._SubParsersAction):
+            return dict(a.choices)
+    return {}
+
+
+def _options(parser: argparse.ArgumentParser) -> dict[str, argparse.Action]:
+    return {s: a for a in parser._actions for s in a.option_strings}
+
+
+def _takes_one_value(a: argparse.Action) -> bool:
+    return a.nargs is None and not isinstance(
+        a, (argparse._StoreConstAction, argparse._CountAction, argparse._HelpAction,
+            argparse._VersionAction, argparse._AppendConstAction))
+
+
+def _parses_as(a: argparse.Action, tok: str) -> bool:
+    if a.type not in (int, float):
+        return False
+    try:
+        a.type(tok)
+    except ValueError:
+        return False
+    return True
+
+
+def _is_verbose(tok: str) -> bool:
+    return tok in _GLOBAL_ONLY or bool(re.fullmatch(r"-v+", tok))
+
+
+def normalise_argv(parser: argparse.ArgumentParser, argv: list[str]) -> list[str]:
+    """Rewrite ``argv`` so that argparse reads it as the user meant (see the module docstring).
+
+    Only these rewrites are made, and only after the sub-command is identified:
+
+    1. ``--opt -0.2,...`` -> ``--opt=-0.2,...`` for options that take one value;
+    2. a numeric list option (``nargs='+'`` with ``type=int``/``float``) keeps only the tokens
+       that parse as its type and moves to the end, so positionals after it stay positionals;
+    3. ``-v``/``--verbose`` (options of the main parser) move before the command; ``-q``/
+       ``--quiet`` move after it when the command defines it, else before it.
+
+    Tokens after a ``--`` separator are left alone.
+    """
+    subs = _subparsers(parser)
+    argv = list(argv)
+    i_cmd = next((i for i, t in enumerate(argv) if t in subs), None)
+    if i_cmd is None:
+        return argv
+    head, cmd, rest = argv[:i_cmd], argv[i_cmd], argv[i_cmd + 1:]
+    sub = subs[cmd]
+    opts = _options(sub)
+    sub_quiet = any(q in opts for q in _QUIET)
+    before, after, tail = [], [], []
+    for t in head:
+        (after if t in _QUIET and sub_quiet else before).append(t)
+    i = 0
+    while i < len(rest):
+        t = rest[i]
+        if t == "--":
+            after.extend(rest[i:])
+            break
+        a = opts.get(t)
+        if a is None and t.startswith("--") and "=" not in t:  # argparse's unique prefixes
+            hits = {id(b): b for o, b in opts.items() if o.startswith(t)}
+            a = next(iter(hits.values())) if len(hits) == 1 else None
+        if a is None:
+            if _is_verbose(t) and t not in opts:
+                before.append(t)
+            elif t in _QUIET and not sub_quiet:
+                before.append(t)
+            else:
+                after.append(t)
+            i += 1
+            continue
+        if _takes_one_value(a):
+            if i + 1 < len(rest) and _NUMBERISH.match(rest[i + 1]):
+                after.append(f"{t}={rest[i + 1]}")
+                i += 2
+                continue
+            after.append(t)
+            if i + 1 < len(rest):
+                after.append(rest[i + 1])
+            i += 2
+            continue
+        if a.nargs in ("+", "*") and a.type in (int, float):
+            j = i + 1
+            while j < len(rest) and _parses_as(a, rest[j]):
+                j += 1
+            if j > i + 1:
+                tail.extend(rest[i:j])
+                i = j
+                continue
+        after.append(t)
+        i += 1
+    return [*before, cmd, *after, *tail]
+
+
+def document_defaults(parser: argparse.ArgumentParser) -> None:
+    """Append ``(default: X)`` to the help of every option of every sub-command whose help does
+    not mention its default (flags and options without a default are left as they are)."""
+    for sub in [parser, *_subparsers(parser).values()]:
+        for a in sub._actions:
+            if a.help in (None, argparse.SUPPRESS) or "default" in a.help.lower():
+                continue
+            if isinstance(a, (argparse._StoreTrueAction, argparse._StoreFalseAction,
+                              argparse._HelpAction, argparse._VersionAction,
+                              argparse._SubParsersAction)):
+                continue
+            d = a.default
+            if d is None or d is argparse.SUPPRESS or d is False or (
+                    isinstance(a, argparse._CountAction) and d == 0):
+                continue
+            if isinstance(d, (list, tuple)):
+                d = " ".join(str(x) for x in d)
+            a.help = f"{a.help} (default: {str(d).replace('%', '%%')})"

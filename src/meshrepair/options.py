@@ -1,0 +1,89 @@
+"""Checks of scalar options at the public boundary, one message style everywhere.
+
+Every public function checks each option before any work: numbers must be finite and in range,
+counts integral, choices known. The message names the option, states the rule and repeats the
+value, e.g. ``tol must be a finite number > 0, got nan``.
+"""
+
+from __future__ import annotations
+
+import math
+import numbers
+from collections.abc import Sequence
+from typing import Any
+
+from .errors import MeshRepairError
+
+__all__ = ["check_bool", "check_choice", "check_int", "check_number"]
+
+
+def _bounds(low, high, low_open, high_open) -> str:
+    parts = []
+    if low is not None:
+        parts.append(f"{'>' if low_open else '>='} {low:g}")
+    if high is not None:
+        parts.append(f"{'<' if high_open else '<='} {high:g}")
+    if len(parts) == 2 and low is not None and high is not None:
+        lb = "(" if low_open else "["
+        rb = ")" if high_open else "]"
+        return f"in {lb}{low:g}, {high:g}{rb}"
+    return " and ".join(parts)
+
+
+def check_number(name: str, value: Any, *, low: float | None = None, high: float | None = None,
+                 low_open: bool = False, high_open: bool = False,
+                 allow_none: bool = False) -> float | None:
+    """``float(value)`` if it is a finite real number within the bounds, else MeshRepairError.
+
+    ``low_open``/``high_open`` make the bound strict. ``None`` is returned as is if
+    ``allow_none``.
+    """
+    if value is None and allow_none:
+        return None
+    rule = "a finite number" + (f" {_bounds(low, high, low_open, high_open)}"
+                                if low is not None or high is not None else "")
+    if isinstance(value, bool) or not isinstance(value, numbers.Real):
+        raise MeshRepairError(f"{name} must be {rule}, got {value!r}")
+    v = float(value)
+    ok = math.isfinite(v)
+    if ok and low is not None:
+        ok = v > low if low_open else v >= low
+    if ok and high is not None:
+        ok = v < high if high_open else v <= high
+    if not ok:
+        raise MeshRepairError(f"{name} must be {rule}, got {value!r}")
+    return v
+
+
+def check_int(name: str, value: Any, *, low: int | None = None, high: int | None = None,
+              allow_none: bool = False) -> int | None:
+    """``int(value)`` if it is an integer (an integral float is accepted) within
+    ``[low, high]``, else MeshRepairError."""
+    if value is None and allow_none:
+        return None
+    rule = "an integer" + (f" {_bounds(low, high, False, False)}"
+                           if low is not None or high is not None else "")
+    if isinstance(value, bool) or not isinstance(value, numbers.Real):
+        raise MeshRepairError(f"{name} must be {rule}, got {value!r}")
+    v = float(value)
+    if not math.isfinite(v) or v != int(v):
+        raise MeshRepairError(f"{name} must be {rule}, got {value!r}")
+    iv = int(v)
+    if (low is not None and iv < low) or (high is not None and iv > high):
+        raise MeshRepairError(f"{name} must be {rule}, got {value!r}")
+    return iv
+
+
+def check_choice(name: str, value: Any, choices: Sequence[str]) -> str:
+    """``value`` if it is one of ``choices``, else MeshRepairError listing them."""
+    if not isinstance(value, str) or value not in choices:
+        raise MeshRepairError(f"{name} must be one of {', '.join(map(repr, choices))}, "
+                              f"got {value!r}")
+    return value
+
+
+def check_bool(name: str, value: Any) -> bool:
+    """``bool(value)`` for True/False (numpy bools too), else MeshRepairError."""
+    if isinstance(value, bool) or type(value).__name__ == "bool_":
+        return bool(value)
+    raise MeshRepairError(f"{name} must be True or False, got {value!r}")
