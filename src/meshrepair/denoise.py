@@ -3,7 +3,9 @@
 Default schedule (docs/parameters.md has the measurements behind every rule; the decisions are
 recorded in ``DenoiseResult.params``):
 
-0. *Unfold* faces folded over by noise (:func:`meshrepair.relax.untangle`).
+0. *Unfold* faces folded over by noise (:func:`meshrepair.relax.untangle`). The unfolded mesh
+   is the start of the solves; the fidelity data stays the input, except for impulsive noise
+   (:func:`fidelity_data`).
 1. *Probe*: the robust stage below on the whole mesh (MC with ``a = 0.5`` on every edge, a
    total-variation-like smoother of the normals). Its result N¹ decides:
 
