@@ -259,3 +259,73 @@ def test_quality_published_trim_star_beats_gcn():
     assert msae(r.V, Vt, F) < 0.6 * msae(Vp, Vt, F)
     assert ea(r.V) < 0.97 * ea(Vp)
     assert vertex_error(r.V, Vt) < 0.95 * vertex_error(Vp, Vt)
+
+
+def test_unfold_result_removes_folds_locally():
+    """``unfold_result``: a face folded over in a result is unfolded, vertices away from the
+    fold do not move, and a result without folds is returned as is."""
+    from meshrepair.denoise import unfold_result
+    from meshrepair.relax import locally_flipped_faces
+    from meshrepair.topology import edge_topology
+
+    ico = trimesh.creation.icosphere(subdivisions=3)
+    V = np.asarray(ico.vertices) * 10
+    F = np.asarray(ico.faces, dtype=np.int64)
+    topo = edge_topology(F, len(V))
+    same, n0 = unfold_result(V, topo)
+    assert same is V and n0 == 0
+    Vf = V.copy()
+    far = np.argsort(np.linalg.norm(V - V[0], axis=1))[25]
+    Vf[0] = 0.5 * (V[0] + V[far])  # vertex 0 slides across its fan: its faces fold over
+    assert locally_flipped_faces(Vf, topo).any()
+    Vu, n = unfold_result(Vf, topo)
+    assert n > 0 and not locally_flipped_faces(Vu, topo).any()
+    moved = np.linalg.norm(Vu - Vf, axis=1) > 0
+    near = np.linalg.norm(V - V[0], axis=1) < 0.6 * 10  # within a few rings of the fold
+    assert moved.any() and not moved[~near].any()
+
+
+def test_denoise_result_has_no_folds():
+    """A fold held by a strong fidelity to the (folded) input survives the solves (measured: one
+    face with ``UNFOLD_RESULT = False``) and is unfolded at the end. Without the region probe
+    there is no reference for the cluster check, so every fold is unfolded; with it, the probe
+    (λ = 200 holds it to the folded data too) is folded there as well and the fold is kept."""
+    from meshrepair import add_noise
+    from meshrepair.relax import locally_flipped_faces
+    from meshrepair.topology import edge_topology
+
+    ico = trimesh.creation.icosphere(subdivisions=3)
+    V = np.asarray(ico.vertices) * 10
+    F = np.asarray(ico.faces, dtype=np.int64)
+    Vn = add_noise(V, F, 0.05, seed=3)
+    far = np.argsort(np.linalg.norm(V - V[0], axis=1))[25]
+    Vn[0] = 0.5 * (V[0] + V[far])
+    topo = edge_topology(F, len(V))
+    r = denoise(Vn, F, lam=200.0, regions=False)
+    assert r.params["fidelity_data"] == "input" and r.params["result_folds_unfolded"] >= 1
+    assert not locally_flipped_faces(r.V, topo).any()
+    r2 = denoise(Vn, F, lam=200.0)
+    assert r2.params["result_folds_unfolded"] >= 1 and locally_flipped_faces(r2.V, topo).any()
+
+
+def test_unfold_result_cluster_check():
+    """With a reference, a cluster keeps its unfolded positions only when its faces then agree
+    better with the reference normals: a reference equal to the folded result (the fold is
+    "true") keeps the fold, the clean mesh as reference accepts the unfolding."""
+    from meshrepair.denoise import unfold_result
+    from meshrepair.relax import locally_flipped_faces
+    from meshrepair.topology import edge_topology
+
+    ico = trimesh.creation.icosphere(subdivisions=3)
+    V = np.asarray(ico.vertices) * 10
+    F = np.asarray(ico.faces, dtype=np.int64)
+    topo = edge_topology(F, len(V))
+    Vf = V.copy()
+    far = np.argsort(np.linalg.norm(V - V[0], axis=1))[25]
+    Vf[0] = 0.5 * (V[0] + V[far])
+    kept, n = unfold_result(Vf, topo, Vf)
+    assert n > 0 and np.array_equal(kept, Vf)
+    fixed, n2 = unfold_result(Vf, topo, V)
+    assert n2 == n and not locally_flipped_faces(fixed, topo).any()
+    plain, _ = unfold_result(Vf, topo)
+    assert np.array_equal(fixed, plain)
