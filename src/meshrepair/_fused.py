@@ -22,7 +22,8 @@ regulariser of (6) (the history energy) in one edge pass.
 Each kernel has a numpy twin (``tests/test_kernels.py`` checks they agree). The compiled face
 passes of :func:`venergy_grad_hdiag`, :func:`venergy_trial` and :func:`normals_update_rho2`
 share their loop bodies (inlined helpers) with ``_kernels.venergy_grad``, ``_kernels.venergy``
-and ``_kernels.face_normals`` and are compiled beside them in :mod:`meshrepair._kernels.faces`.
+and ``_kernels.face_normals`` and are compiled beside them in :mod:`meshrepair._kernels.faces`;
+likewise :func:`lengths_reg_energy` with ``_kernels.reg_energy`` in :mod:`meshrepair._kernels.admm`.
 """
 
 from __future__ import annotations
@@ -33,9 +34,11 @@ from . import _kernels as _k
 from ._kernels import FASTMATH, HAVE_NUMBA, _np_venergy, _np_venergy_grad, _np_vhess_diag
 
 if HAVE_NUMBA:
-    # the face passes share their loop bodies with _kernels.faces (inlined helpers there), so
-    # they are compiled there; the vertex and edge passes below share none
+    # the face passes and the lengths + regulariser pass share their loop bodies with
+    # _kernels.faces / _kernels.admm (inlined helpers there), so they are compiled there; the
+    # two passes below share none
     from ._kernels import njit
+    from ._kernels.admm import _nb_lengths_reg_energy
     from ._kernels.faces import _nb_normals_update_rho2, _nb_venergy_grad_hdiag, _nb_venergy_trial
 
     @njit(cache=True, fastmath=FASTMATH)
@@ -62,31 +65,6 @@ if HAVE_NUMBA:
                 num += x * x
                 den += B[i, k] * B[i, k]
         return np.sqrt(num / max(den, 1e-300))
-
-    @njit(cache=True, fastmath=FASTMATH)
-    def _nb_lengths_reg_energy(V, E, Nv, fa, fb, sharp, a, w):  # pragma: no cover - compiled
-        l = np.empty(E.shape[0])
-        knee = np.sqrt(2.0 / a)
-        s2a = np.sqrt(2.0 * a)
-        e = 0.0
-        for i in range(E.shape[0]):
-            u, v = E[i, 0], E[i, 1]
-            dx = V[v, 0] - V[u, 0]
-            dy = V[v, 1] - V[u, 1]
-            dz = V[v, 2] - V[u, 2]
-            le = np.sqrt(dx * dx + dy * dy + dz * dz)
-            l[i] = le
-            p, q = fa[i], fb[i]
-            tx = le * (Nv[p, 0] - Nv[q, 0])
-            ty = le * (Nv[p, 1] - Nv[q, 1])
-            tz = le * (Nv[p, 2] - Nv[q, 2])
-            n2 = tx * tx + ty * ty + tz * tz
-            if sharp[i]:
-                nt = np.sqrt(n2)
-                e += (-0.5 * a * n2 + s2a * nt) if nt < knee else 1.0
-            else:
-                e += w * n2
-        return l, e
 
 
 def normals_update_rho2(V, F, N, rho2, beta2):

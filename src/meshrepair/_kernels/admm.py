@@ -224,23 +224,45 @@ if HAVE_NUMBA:
                 s += r * r
         return s
 
+    @njit(cache=True, inline="always")
+    def _edge_reg(Nv, p, q, le, sharp, a, w, knee, s2a):  # pragma: no cover - compiled
+        """Regulariser of (6) on one interior edge: the MC penalty of ``|t|`` where ``sharp``,
+        else ``w |t|²``, with ``t = le (Nv[p] - Nv[q])``, ``knee = sqrt(2 / a)``,
+        ``s2a = sqrt(2 a)``."""
+        dx = le * (Nv[p, 0] - Nv[q, 0])
+        dy = le * (Nv[p, 1] - Nv[q, 1])
+        dz = le * (Nv[p, 2] - Nv[q, 2])
+        n2 = dx * dx + dy * dy + dz * dz
+        if sharp:
+            nt = np.sqrt(n2)
+            return (-0.5 * a * n2 + s2a * nt) if nt < knee else 1.0
+        return w * n2
+
     @njit(cache=True, fastmath=FASTMATH)
     def _nb_reg_energy(Nv, l, fa, fb, sharp, a, w):  # pragma: no cover - compiled
         knee = np.sqrt(2.0 / a)
         s2a = np.sqrt(2.0 * a)
         e = 0.0
         for i in range(fa.shape[0]):
-            p, q, le = fa[i], fb[i], l[i]
-            dx = le * (Nv[p, 0] - Nv[q, 0])
-            dy = le * (Nv[p, 1] - Nv[q, 1])
-            dz = le * (Nv[p, 2] - Nv[q, 2])
-            n2 = dx * dx + dy * dy + dz * dz
-            if sharp[i]:
-                nt = np.sqrt(n2)
-                e += (-0.5 * a * n2 + s2a * nt) if nt < knee else 1.0
-            else:
-                e += w * n2
+            e += _edge_reg(Nv, fa[i], fb[i], l[i], sharp[i], a, w, knee, s2a)
         return e
+
+    @njit(cache=True, fastmath=FASTMATH)
+    def _nb_lengths_reg_energy(V, E, Nv, fa, fb, sharp, a, w):  # pragma: no cover - compiled
+        # meshrepair._fused.lengths_reg_energy: the edge lengths and _nb_reg_energy in one pass
+        l = np.empty(E.shape[0])
+        knee = np.sqrt(2.0 / a)
+        s2a = np.sqrt(2.0 * a)
+        e = 0.0
+        for i in range(E.shape[0]):
+            u, v = E[i, 0], E[i, 1]
+            dx = V[v, 0] - V[u, 0]
+            dy = V[v, 1] - V[u, 1]
+            dz = V[v, 2] - V[u, 2]
+            le = np.sqrt(dx * dx + dy * dy + dz * dz)
+            l[i] = le
+            e += _edge_reg(Nv, fa[i], fb[i], le, sharp[i], a, w, knee, s2a)
+        return l, e
 
     @njit(cache=True, fastmath=FASTMATH)
     def _nb_sqdist(A, B, wts):  # pragma: no cover - compiled
