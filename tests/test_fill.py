@@ -628,3 +628,20 @@ def test_real_scan_rabbit_small_hole_filled_opening_kept_or_refused():
     # recognised as the open border by its size (issue 13), not tried and refused
     assert "open border" in full.holes[0].reason
     assert np.array_equal(full.F, kept.F)
+
+
+def test_solve_options_are_the_shared_keywords_of_fill_holes_and_inpaint():
+    """fill_holes and inpaint pass SOLVE_OPTIONS on to the shared solve by name: every one must be
+    a keyword-only parameter of both (with the same default), and no other parameter of both."""
+    import inspect
+
+    from meshrepair.fill import SOLVE_OPTIONS
+
+    def kw(f):
+        return {n: p.default for n, p in inspect.signature(f).parameters.items()
+                if p.kind is p.KEYWORD_ONLY}
+
+    a, b = kw(fill_holes), kw(inpaint)
+    shared = set(a) & set(b)
+    assert shared == set(SOLVE_OPTIONS)
+    assert all(a[n] == b[n] for n in shared)

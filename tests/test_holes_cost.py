@@ -219,7 +219,7 @@ def test_intersecting_faired_patch_keeps_half_the_fairing_before_the_membrane(mo
             return 1
         return real(V1, F1, faces, ignore, pairs)
 
-    monkeypatch.setattr(fill_mod, "_intersecting", fake)
+    monkeypatch.setattr(fill_mod.place, "_intersecting", fake)  # where the placement calls it
     half = fill_holes(V, F, keep_border=True, refine=False)
     h = [r for r in half.holes if r.status == "filled"][0]
     assert "0.5 faired" in h.reason

@@ -192,14 +192,12 @@ def _template_context(template, rings: int) -> np.ndarray | None:
 
 def _check_template(VP: np.ndarray, FP: np.ndarray) -> np.ndarray:
     """Validate the template and return its boundary loop."""
+    from .stitch import degenerate_seam_error
     from .validate import check_mesh
 
     rep = check_mesh(VP, FP, name="template")
     if rep.n_degenerate_faces:
-        raise MeshRepairError(
-            f"stitching the template into the hole gives {rep.n_degenerate_faces} zero-area "
-            "faces (template faces whose corners land on collinear seam vertices); subdivide the "
-            "template near its boundary, or choose a slightly different region")
+        raise degenerate_seam_error(rep.n_degenerate_faces)
     if rep.n_pinched_vertices:
         raise MeshRepairError(f"template: {rep.n_pinched_vertices} non-manifold (pinched) "
                               "vertices; the template must be a manifold patch: split or clean "

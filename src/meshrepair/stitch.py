@@ -26,6 +26,16 @@ from .topology import boundary_loops, edge_topology, vertex_adjacency
 log = logging.getLogger(__name__)
 
 
+def degenerate_seam_error(n: int) -> MeshRepairError:
+    """The error for a stitch that would create ``n`` zero-area faces (raised by
+    :func:`stitch_template`, and up front by :func:`meshrepair.complete_input._check_template`
+    for a template that is degenerate already)."""
+    return MeshRepairError(
+        f"stitching the template into the hole gives {n} zero-area faces (template faces whose "
+        "corners land on collinear seam vertices); subdivide the template near its boundary, or "
+        "choose a slightly different region")
+
+
 def _to_loop_params(params_seq: list[np.ndarray], reversed_seq: bool) -> list[np.ndarray]:
     """Convert split fractions given along a sequence to the loop's own edge order."""
     if not reversed_seq:
@@ -229,10 +239,7 @@ def stitch_template(V: np.ndarray, F: np.ndarray, region_faces: np.ndarray, remo
         log.warning("the completed mesh has %d boundary loops (input %d)", n_loops_out,
                     n_loops_in)
     if rep.n_degenerate_faces:
-        raise MeshRepairError(
-            f"stitching the template into the hole gives {rep.n_degenerate_faces} zero-area "
-            "faces (template faces whose corners land on collinear seam vertices); subdivide the "
-            "template near its boundary, or choose a slightly different region")
+        raise degenerate_seam_error(rep.n_degenerate_faces)
     if rep.n_pinched_vertices:
         log.warning("the completed mesh has %d pinched vertices", rep.n_pinched_vertices)
     log.info("stitched: %d vertices (%d inserted on b0, %d on b_P), %d faces, seam RMS %.3g",

@@ -7,7 +7,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from ..errors import MeshRepairError
-from ..topology import edge_topology
+from ._fairing_common import _barycentric_areas, _free_mask, _laplacian, _usable_rows
 from ._geom2d import _cotan_weights_2d
 
 
@@ -52,11 +52,8 @@ def fair_vertices(V: np.ndarray, F: np.ndarray, free: np.ndarray, *, order: int 
     """
     from scipy.sparse.linalg import spsolve
 
-    V = np.array(V, dtype=np.float64, copy=True)
-    F = np.asarray(F, dtype=np.int64)
+    V, F, fm = _free_mask(V, F, free)
     nV = len(V)
-    fm = np.zeros(nV, bool)
-    fm[np.asarray(free)] = True
     if not fm.any():
         return V
     if order not in (1, 2):
@@ -70,14 +67,8 @@ def fair_vertices(V: np.ndarray, F: np.ndarray, free: np.ndarray, *, order: int 
     if order == 1:
         rows = fm.copy()
     Floc = F[rows[F].any(axis=1)]
-    topo = edge_topology(F, nV)
-    on_bnd = np.zeros(nV, bool)
-    on_bnd[topo.edges[topo.boundary].ravel()] = True
-    rows &= ~(on_bnd & ~fm)
-    if exclude_rows is not None:
-        ex = np.zeros(nV, bool)
-        ex[np.asarray(exclude_rows)] = True
-        rows &= ~(ex & ~fm)
+    ok, on_bnd = _usable_rows(F, nV, fm, exclude_rows)
+    rows &= ok
     r_idx = np.flatnonzero(rows)
     u_idx = np.flatnonzero(fm)
     kappa = None
@@ -96,11 +87,9 @@ def fair_vertices(V: np.ndarray, F: np.ndarray, free: np.ndarray, *, order: int 
             e = np.unique(e, axis=0)
             W = sp.csr_matrix((np.ones(2 * len(e)), (np.r_[e[:, 0], e[:, 1]],
                                                       np.r_[e[:, 1], e[:, 0]])), shape=(nV, nV))
-        C = (sp.diags(np.asarray(W.sum(axis=1)).ravel()) - W).tocsr()
+        C = _laplacian(W)
         if weights == "cotan":
-            c = np.cross(V[Floc[:, 1]] - V[Floc[:, 0]], V[Floc[:, 2]] - V[Floc[:, 0]])
-            area = np.zeros(nV)
-            np.add.at(area, Floc.ravel(), np.repeat(np.linalg.norm(c, axis=1) / 6.0, 3))
+            area = _barycentric_areas(V, Floc, nV)
         else:
             area = np.ones(nV)
         k_idx = np.flatnonzero(~fm)
@@ -159,10 +148,8 @@ def _curvature_field(V, F, fm, rows, on_bnd, exclude_rows) -> np.ndarray:
     # the full 1-ring of every ring vertex must be original faces (true by construction unless
     # it touches the patch through a loop vertex, which only adds loop vertices as neighbours)
     W = _cotan_weights_2d(V, Fr, nV)
-    C = (sp.diags(np.asarray(W.sum(axis=1)).ravel()) - W).tocsr()
-    c = np.cross(V[Fr[:, 1]] - V[Fr[:, 0]], V[Fr[:, 2]] - V[Fr[:, 0]])
-    area = np.zeros(nV)
-    np.add.at(area, Fr.ravel(), np.repeat(np.linalg.norm(c, axis=1) / 6.0, 3))
+    C = _laplacian(W)
+    area = _barycentric_areas(V, Fr, nV)
     ri = np.flatnonzero(ring)
     t = (C[ri] @ V) / np.maximum(area[ri], 1e-300)[:, None]
     n = _vertex_normals(V, Fr, nV)[ri]
@@ -184,7 +171,7 @@ def _curvature_field(V, F, fm, rows, on_bnd, exclude_rows) -> np.ndarray:
     ep = np.unique(np.sort(np.r_[Fp[:, [0, 1]], Fp[:, [1, 2]], Fp[:, [2, 0]]], axis=1), axis=0)
     Wp = sp.csr_matrix((np.ones(2 * len(ep)), (np.r_[ep[:, 0], ep[:, 1]],
                                                np.r_[ep[:, 1], ep[:, 0]])), shape=(nV, nV))
-    L = (sp.diags(np.asarray(Wp.sum(axis=1)).ravel()) - Wp).tocsr()
+    L = _laplacian(Wp)
     u = np.flatnonzero(fm)
     kn = np.flatnonzero(known & (np.asarray(Wp.sum(axis=1)).ravel() > 0))
     if len(u) == 0 or len(kn) == 0:

@@ -29,7 +29,7 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
-from ..topology import edge_topology
+from ._fairing_common import _barycentric_areas, _free_mask, _laplacian, _usable_rows
 from ._geom2d import _cotan_weights_2d
 
 SCREEN = 0.05
@@ -81,23 +81,13 @@ def fair_triharmonic(V: np.ndarray, F: np.ndarray, free: np.ndarray, *, iteratio
     """
     from scipy.sparse.linalg import spsolve
 
-    V = np.array(V, dtype=np.float64, copy=True)
-    F = np.asarray(F, dtype=np.int64)
+    V, F, fm = _free_mask(V, F, free)
     nV = len(V)
-    fm = np.zeros(nV, bool)
-    fm[np.asarray(free)] = True
     if not fm.any():
         return V
     d = _rings(F, fm, nV, 3)
     Floc = F[(d[F] <= 2).any(axis=1)]  # full 1-rings of every vertex within 2 rings
-    topo = edge_topology(F, nV)
-    on_bnd = np.zeros(nV, bool)
-    on_bnd[topo.edges[topo.boundary].ravel()] = True
-    valid = (d <= 2) & ~(on_bnd & ~fm)
-    if exclude_rows is not None:
-        ex = np.zeros(nV, bool)
-        ex[np.asarray(exclude_rows)] = True
-        valid &= ~(ex & ~fm)
+    valid = (d <= 2) & _usable_rows(F, nV, fm, exclude_rows)[0]
     R = np.flatnonzero(valid)
     u_idx = np.flatnonzero(fm)
     k_idx = np.flatnonzero(~fm)
@@ -107,15 +97,13 @@ def fair_triharmonic(V: np.ndarray, F: np.ndarray, free: np.ndarray, *, iteratio
     h2 = float(np.mean(el)) ** 2
     for _ in range(max(1, iterations)):
         W = _cotan_weights_2d(V, Floc, nV)
-        C = (sp.diags(np.asarray(W.sum(axis=1)).ravel()) - W).tocsr()
-        c = np.cross(V[Floc[:, 1]] - V[Floc[:, 0]], V[Floc[:, 2]] - V[Floc[:, 0]])
-        area = np.zeros(nV)
-        np.add.at(area, Floc.ravel(), np.repeat(np.linalg.norm(c, axis=1) / 6.0, 3))
+        C = _laplacian(W)
+        area = _barycentric_areas(V, Floc, nV)
         L = sp.diags(1.0 / np.maximum(area[R], 1e-300)) @ C[R]  # y_R = L x
         # Dirichlet energy of y over the edges between valid vertices (cotangent weights)
         Wr = W[R][:, R].tocoo()
         Wr = sp.csr_matrix((Wr.data, (Wr.row, Wr.col)), shape=(len(R), len(R)))
-        K = (sp.diags(np.asarray(Wr.sum(axis=1)).ravel()) - Wr).tocsr()
+        K = _laplacian(Wr)
         if SCREEN > 0:
             # a region of the patch enclosed by crease routes has no valid surround vertex:
             # a constant y there costs nothing; a small thin-plate term pins it

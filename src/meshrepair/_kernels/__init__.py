@@ -1,0 +1,104 @@
+"""Fused per-element kernels of the hot loop, compiled with numba when it is installed.
+
+Each kernel has a pure-numpy twin with identical results (checked in ``tests/test_kernels.py``);
+the numpy path is used when numba is missing or ``MESHREPAIR_NO_NUMBA=1`` is set. Profiling showed
+the V-subproblem energy/gradient (gather, cross, normalise, dot, scatter over faces) and the
+edge gathers dominating an ADMM iteration; fusing them removes the temporaries (see
+docs/performance.md).
+"""
+
+from __future__ import annotations
+
+# split by concept: _jit (numba detection, njit, FASTMATH), faces (per-face geometry, the
+# V-subproblem), edges (per-edge gathers), admm (PCG, t update, multipliers, regulariser),
+# connectivity (setup kernels); every name is re-exported here
+from ._jit import CACHE_DISABLED, FASTMATH, HAVE_NUMBA, njit  # noqa: F401
+from .admm import (  # noqa: F401
+    _np_normalize_z,
+    _np_reg_energy,
+    _np_rhs,
+    _np_sqdist,
+    _np_update_rho1,
+    _np_update_rho2,
+    normalize_z,
+    reg_energy,
+    rhs,
+    sqdist,
+    update_rho1,
+    update_rho2,
+)
+from .connectivity import (  # noqa: F401
+    _np_edges_from_groups,
+    _np_face_neighbour_table,
+    _np_group_halfedges,
+    _np_morton,
+    _np_union_find,
+    creased,
+    edges_from_groups,
+    face_neighbour_table,
+    group_halfedges,
+    morton,
+    union_find,
+)
+from .edges import (  # noqa: F401
+    _np_edge_lengths,
+    _np_grad_edges,
+    _np_grad_edges_T,
+    _np_umbrella,
+    edge_lengths,
+    grad_edges,
+    grad_edges_T,
+    neighbor_sum,
+    umbrella,
+)
+from .faces import (  # noqa: F401
+    _np_face_area2_lmax2,
+    _np_face_normals,
+    _np_venergy,
+    _np_venergy_grad,
+    _np_vertex_normals,
+    _np_vhess_diag,
+    face_area2_lmax2,
+    face_normals,
+    venergy,
+    venergy_grad,
+    vertex_normals,
+    vhess_diag,
+)
+
+if HAVE_NUMBA:
+    from .admm import (  # noqa: F401
+        _nb_lap_matvec_dot,
+        _nb_normalize_z,
+        _nb_pcg,
+        _nb_reg_energy,
+        _nb_rhs,
+        _nb_sqdist,
+        _nb_t_update,
+        _nb_update_rho1,
+        _nb_update_rho2,
+    )
+    from .connectivity import (  # noqa: F401
+        _nb_creased,
+        _nb_edges_from_groups,
+        _nb_face_neighbour_table,
+        _nb_group_halfedges,
+        _nb_morton,
+        _nb_union_find,
+    )
+    from .edges import (  # noqa: F401
+        _nb_edge_lengths,
+        _nb_grad_edges,
+        _nb_grad_edges_T,
+        _nb_neighbor_sum,
+        _nb_umbrella,
+    )
+    from .faces import (  # noqa: F401
+        _nb_face_area2_lmax2,
+        _nb_face_normals,
+        _nb_venergy,
+        _nb_venergy_grad,
+        _nb_vertex_normals,
+        _nb_vhess_diag,
+        _tri,
+    )

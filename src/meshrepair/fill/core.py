@@ -1,0 +1,122 @@
+"""The repair solve shared by :func:`meshrepair.fill.fill_holes` and
+:func:`meshrepair.fill.inpaint` (step 4 of :mod:`meshrepair.fill`): the patches placed by
+:mod:`meshrepair.fill.place`, then the ADMM solve (fill only: the patches and ``rings`` rings of
+fixed faces; fill + denoise: the whole mesh) and the final intersection count."""
+
+from __future__ import annotations
+
+import logging
+import time
+from collections.abc import Callable
+
+import numpy as np
+
+from ..holes import self_intersections
+from ..solver import ADMMSolver, SolverOptions, Stage
+from ..topology import edge_topology
+from .patches import _blocks, _crease_edges, _edge_ids, _finite_rows, _intersecting, _ring_faces
+from .place import _place_patches
+from .result import FillResult
+
+log = logging.getLogger("meshrepair.fill")
+
+
+def _fill_core(V: np.ndarray, F: np.ndarray, holes, skip: dict[int, str], *, denoise: bool,
+               initial: str, refine: bool, edge_length: float | None, lam: float | None,
+               th: float, a: float, max_iter: int, tol: float, rings: int, relax: float,
+               inner_solver: str, inner_iters: int, check: bool,
+               callback: Callable[[dict], None] | None,
+               progress: Callable[[int, int], None] | None = None,
+               creases: bool = True, curvature: bool = True,
+               triharmonic: bool = True) -> FillResult:
+    from ..geometry import face_normals, sharp_edge_mask
+
+    t0 = time.perf_counter()
+    nV, nF = len(V), len(F)
+    V1, F1, reports, t_enclose, t_initial = _place_patches(
+        V, F, holes, skip, initial=initial, edge_length=edge_length, th=th, check=check,
+        progress=progress, creases=creases, curvature=curvature, triharmonic=triharmonic)
+    t2 = time.perf_counter()
+    new_v = np.arange(nV, len(V1), dtype=np.int64)
+    new_f = np.arange(nF, len(F1), dtype=np.int64)
+    M_V = np.ones(len(V1))
+    M_V[new_v] = 0.0
+    topo = edge_topology(F1, len(V1))
+    patch_edges = np.zeros(topo.n_edges, bool)
+    patch_edges[topo.face_edges[new_f].ravel()] = True
+    edge_force = np.full(topo.n_edges, -1, np.int8)
+    edge_force[patch_edges] = 0
+    crease_e = _edge_ids(topo, _crease_edges(reports), len(V1))
+    edge_force[crease_e] = 1  # routed creases: the MC penalty rebuilds them sharp
+    history: list[dict] = []
+    iterations = 0
+    stop_reason = "no solve"
+    params: dict = {"denoise": denoise, "initial": initial, "refine": refine, "th": th}
+    M_E = sharp_edge_mask(face_normals(V1, F1), topo, th).astype(bool) & ~patch_edges
+    M_E[crease_e] = True
+    V_before = V1
+    if denoise:
+        from ..denoise import default_stages, lambda_from_noise
+        from ..noise import estimate_noise
+
+        gamma = estimate_noise(V, F)
+        lam_used = lambda_from_noise(gamma) if lam is None else float(lam)
+        opts = SolverOptions(lam=lam_used, th=th, stages=default_stages(a=a), tol=tol,
+                             inner_solver=inner_solver, inner_iters=inner_iters,
+                             mask_update_every=3)
+        solver = ADMMSolver(F1, len(V1), M_V=M_V, edge_force=edge_force, options=opts, topo=topo)
+        res = solver.solve(V1, callback=callback)
+        V1 = res.V
+        M_E = np.asarray(res.M_E, bool)
+        history, iterations, stop_reason = res.history, res.iterations, res.stop_reason
+        params.update(lam=lam_used, noise_estimate=gamma, a=a)
+    elif refine and len(new_v):
+        # local solve: the patches and `rings` rings of fixed faces around them
+        fm = _ring_faces(F1, new_v, len(V1), rings)
+        fidx = np.flatnonzero(fm)
+        used = np.unique(F1[fidx].ravel())
+        loc = -np.ones(len(V1), np.int64)
+        loc[used] = np.arange(len(used))
+        Fl = loc[F1[fidx]]
+        fixed = M_V[used] > 0
+        topo_l = edge_topology(Fl, len(used))
+        ef = np.full(topo_l.n_edges, -1, np.int8)
+        ef[topo_l.face_edges[fidx >= nF].ravel()] = 0
+        ce = _crease_edges(reports)
+        if len(ce):
+            ef[_edge_ids(topo_l, loc[ce], len(used))] = 1
+        stage = Stage(a=a, eps=1.2, beta2_ratio=5.0, mask="none", max_iter=max_iter,
+                      min_iter=min(max_iter, 30), relax=relax, name="fill")
+        opts = SolverOptions(lam=1.0, th=th, stages=(stage,), tol=tol, inner_solver=inner_solver,
+                             inner_iters=inner_iters)
+        solver = ADMMSolver(Fl, len(used), M_V=M_V[used], edge_force=ef, fixed=fixed,
+                            options=opts, topo=topo_l)
+        res = solver.solve(V1[used], callback=callback)
+        V1 = V1.copy()
+        V1[used[~fixed]] = res.V[~fixed]
+        V1 = _finite_rows(V1, V_before, new_v, "the ADMM solve")
+        history, iterations, stop_reason = res.history, res.iterations, res.stop_reason
+        params.update(rings=rings, max_iter=max_iter, relax=relax)
+    t3 = time.perf_counter()
+    if check:
+        pairs1 = self_intersections(V1, F1, new_f) if len(new_f) else None
+        by_rep = {r.index: r for r in reports}
+        for i, (bv, bf) in _blocks(reports, nV, nF).items():
+            rep = by_rep[i]
+            rep.n_intersections = _intersecting(V1, F1, bf, pairs=pairs1)
+            if rep.n_intersections and not denoise and V1 is not V_before:
+                V1[bv] = V_before[bv]
+                rep.n_intersections = _intersecting(V1, F1, bf)
+                log.warning("hole %d: the solve made the patch intersect the mesh; kept the "
+                            "initial patch", i)
+            if rep.n_intersections:
+                log.warning("hole %d: %d face pairs of the patch intersect the mesh", i,
+                            rep.n_intersections)
+    return FillResult(
+        V=V1, F=F1, M_V=M_V, M_E=M_E, edges=topo.edges.copy(),
+        history=history, holes=reports, new_vertices=new_v, new_faces=new_f,
+        vertex_map=np.arange(nV, dtype=np.int64), iterations=iterations,
+        stop_reason=stop_reason, params=params,
+        timings={"enclose": t_enclose, "initial": t_initial, "solve": t3 - t2,
+                 "total": time.perf_counter() - t0},
+    )

@@ -1,0 +1,136 @@
+"""The inpaint task: :func:`inpaint` removes a damaged region and fills the holes it opens."""
+
+from __future__ import annotations
+
+import logging
+from collections.abc import Callable
+
+import numpy as np
+
+from ..errors import MeshRepairError
+from ..holes.budget import check_budget
+from .core import _fill_core
+from .options import _check_options, _solve_options
+from .region import _remove_region, region_mask
+from .result import FillResult
+
+log = logging.getLogger("meshrepair.fill")
+
+
+def inpaint(
+    V,
+    F,
+    region,
+    *,
+    denoise: bool = False,
+    initial: str = "bilaplacian",
+    refine: bool = True,
+    edge_length: float | None = None,
+    lam: float | None = None,
+    th: float = 30.0,
+    a: float = 10.0,
+    max_iter: int = 150,
+    tol: float = 1e-5,
+    rings: int = 3,
+    relax: float = 0.0,
+    inner_solver: str = "armijo",
+    inner_iters: int = 3,
+    check: bool = True,
+    callback: Callable[[dict], None] | None = None,
+    progress: Callable[[int, int], None] | None = None,
+    creases: bool = True,
+    curvature: bool = True,
+    triharmonic: bool = True,
+) -> FillResult:
+    """Replace a damaged region of a mesh by a smooth patch.
+
+    The faces with at least one corner in the region are removed (plus dangling faces, faces
+    around vertices the removal would leave pinched, and small pieces it would cut off; see
+    ``FillResult.removed_faces``); the vertices no longer used by any face are dropped; every hole
+    this opens is filled as in :func:`fill_holes`. Holes the input already had are left alone.
+
+    Parameters
+    ----------
+    V : (nV, 3) float array, or a ``trimesh.Trimesh`` (then pass ``F=None``)
+    F : (nF, 3) int array or None
+    region : vertex indices, a bool (or 0/1) mask of length nV, ``("sphere", center, radius)`` or
+        ``("box", lo, hi)`` (see :func:`region_mask`).
+    denoise, initial, refine, edge_length, lam, th, a, max_iter, tol, rings, relax, inner_solver,
+    inner_iters, check, callback, progress, creases, curvature, triharmonic : as in
+        :func:`fill_holes`.
+
+    Returns
+    -------
+    FillResult
+        ``vertex_map[i]`` is the output index of input vertex ``i`` (-1 if dropped); kept input
+        vertices come first in their original order, the new vertices after. ``F`` holds the
+        kept input faces in their original order, then the new faces. ``holes`` reports only the
+        holes opened by the removal.
+
+    Raises
+    ------
+    MeshRepairError
+        For an invalid mesh or region, an empty region, or a region covering the whole mesh.
+    """
+    opts = _solve_options(locals())
+    from ..holes import _find_holes
+    from ..io import as_arrays
+    from ..validate import check_mesh
+
+    V, F = as_arrays(V, F)
+    check_mesh(V, F, name="input mesh")
+    opts = _check_options(opts)
+    nV, _nF = len(V), len(F)
+    vmask = region_mask(V, region)
+    if not vmask.any():
+        raise MeshRepairError("the inpainting region contains no vertex of the mesh; check its "
+                              "position and size (coordinates are in mesh units)")
+    removed, notes = _remove_region(F, nV, vmask)
+    if removed.all():
+        raise MeshRepairError("the inpainting region covers the whole mesh; nothing would be "
+                              "left to fill from: use a smaller region")
+    for n in notes:
+        log.info("inpaint: %s", n)
+    keepF = F[~removed]
+    used_before = np.zeros(nV, bool)
+    used_before[F.ravel()] = True
+    used_after = np.zeros(nV, bool)
+    used_after[keepF.ravel()] = True
+    drop = used_before & ~used_after
+    vmap = np.full(nV, -1, np.int64)
+    kept = np.flatnonzero(~drop)
+    vmap[kept] = np.arange(len(kept))
+    V2 = V[kept]
+    F2 = vmap[keepF]
+    # holes opened by the removal: loops through a vertex of a removed face
+    found = _find_holes(V2, F2)
+    old_edges: set[tuple[int, int]] = set()
+    for h in _find_holes(V, F):
+        old_edges.update(zip(h.vertices.tolist(), np.roll(h.vertices, -1).tolist(), strict=True))
+    skip: dict[int, str] = {}
+    for h in found:
+        lp = kept[h.vertices]
+        if set(zip(lp.tolist(), np.roll(lp, -1).tolist(), strict=True)) <= old_edges:
+            skip[h.index] = "hole of the input, not part of the region (use fill_holes for it)"
+    # removal that cuts a component into several large parts: refuse the loops of those parts
+    from ..topology import connected_components
+
+    lab0 = connected_components(F, nV)[1]
+    lab2 = connected_components(F2, len(V2))[1]
+    part_orig: dict[int, set[int]] = {}
+    for p, o in zip(lab2[F2[:, 0]].tolist(), lab0[kept[F2[:, 0]]].tolist(), strict=True):
+        part_orig.setdefault(o, set()).add(p)
+    cut_parts = {p for parts in part_orig.values() if len(parts) > 1 for p in parts}
+    for h in found:
+        if h.index not in skip and int(lab2[h.vertices[0]]) in cut_parts:
+            n_parts = max(len(v) for v in part_orig.values())
+            skip[h.index] = (f"the region cuts the mesh into {n_parts} parts; filling each cut "
+                             "separately would cap the parts instead of rejoining them: use a "
+                             "region that does not go all the way round")
+    check_budget([h for h in found if h.index not in skip], edge_length, what="inpaint")
+    res = _fill_core(V2, F2, found, skip, **opts)
+    res.vertex_map = vmap
+    res.removed_faces = np.flatnonzero(removed).astype(np.int64)
+    res.params.update(region_vertices=int(vmask.sum()), removal_notes=notes)
+    res.holes = [h for h in res.holes if not h.reason.startswith("hole of the input")]
+    return res

@@ -1,0 +1,35 @@
+"""The options shared by :func:`meshrepair.fill.fill_holes` and :func:`meshrepair.fill.inpaint`:
+which they are, and their checks."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+
+from ..errors import MeshRepairError
+from ..holes.budget import check_fill_options
+
+INITIAL_MODES = ("bilaplacian", "harmonic")
+
+SOLVE_OPTIONS: tuple[str, ...] = (
+    "denoise", "initial", "refine", "edge_length", "lam", "th", "a", "max_iter", "tol", "rings",
+    "relax", "inner_solver", "inner_iters", "check", "callback", "progress", "creases",
+    "curvature", "triharmonic")
+"""Keyword parameters of both :func:`meshrepair.fill.fill_holes` and
+:func:`meshrepair.fill.inpaint` that are passed on unchanged to the shared solve
+(:func:`meshrepair.fill.core._fill_core`)."""
+
+
+def _solve_options(params: Mapping[str, object]) -> dict:
+    """The :data:`SOLVE_OPTIONS` out of ``params`` (the caller's ``locals()`` on entry)."""
+    return {k: params[k] for k in SOLVE_OPTIONS}
+
+
+def _check_options(opts: dict) -> dict:
+    """Check the solve options (:class:`MeshRepairError` naming the bad one); returns them with
+    ``max_iter`` and ``rings`` as ``int``."""
+    initial = opts["initial"]
+    if initial not in INITIAL_MODES:
+        raise MeshRepairError(f"initial must be one of {INITIAL_MODES}, got {initial!r}")
+    check_fill_options(**{k: opts[k] for k in ("edge_length", "lam", "th", "a", "max_iter", "tol",
+                                                "rings", "relax", "inner_iters")})
+    return {**opts, "max_iter": int(opts["max_iter"]), "rings": int(opts["rings"])}

@@ -1,0 +1,189 @@
+"""Placement of the patches before the repair solve (steps 2-3 of :mod:`meshrepair.fill`):
+enclosing, the initial position (thin plate, triharmonic candidate), and the intersection and
+seam checks that retry a hole with a blend of the fairing, its unfaired surface or the next
+enclosing method of :data:`meshrepair.fill.ENCLOSE_ORDER`, or refuse it."""
+
+from __future__ import annotations
+
+import logging
+import time
+from collections.abc import Callable
+
+import numpy as np
+
+from ..holes import LIEPA_MAX_LOOP, HoleReport, enclose_holes, fair_vertices, self_intersections
+from ..holes.creases import find_crease_routes
+from ..holes.triharmonic import fair_triharmonic
+from .patches import (
+    _blocks,
+    _crease_edges,
+    _drop_patches,
+    _finite_rows,
+    _intersecting,
+    _seam_angle,
+    _sharp_vertices,
+)
+
+log = logging.getLogger("meshrepair.fill")
+
+_METHOD_NAMES = {"auto": "planar projection", "liepa": "minimum-weight triangulation"}
+
+
+def _enclose_methods(hole) -> list[str]:
+    """Enclosing methods to try on ``hole``, in order (``"liepa"`` only up to
+    :data:`meshrepair.holes.LIEPA_MAX_LOOP` boundary vertices)."""
+    from . import ENCLOSE_ORDER  # looked up on each call: meshrepair.fill.ENCLOSE_ORDER may be set
+
+    out = [m for m in ENCLOSE_ORDER if m != "liepa" or hole.n_boundary <= LIEPA_MAX_LOOP]
+    return out or ["auto"]
+
+BLEND_STEPS = (0.5, 0.25)
+"""When the faired patch intersects the surround, these fractions of the fairing (from the
+initial surface) are tried before the initial surface itself."""
+
+SEAM_RETRY_FACTOR = 1.5
+SEAM_RETRY_MARGIN = 3.0
+"""A planar patch whose mean dihedral angle across its loop exceeds
+``SEAM_RETRY_FACTOR * surround + SEAM_RETRY_MARGIN`` degrees (surround: the original edges within
+3 rings) is enclosed again by Liepa's triangulation and the smoother seam kept. Measured on the
+peers benchmark (docs/holes.md): rocker_arm r=8 seams 25.3° / 19.6° vs surround 7.9° / 8.4°
+(Liepa: 8.6° / 5.8°, patch distance 0.62× / 0.59×), trim_star crease r=8 14.4° vs 5.3° (Liepa
+7.0°, 0.85×); unchanged below the rule: spot (1.7° vs 1.6°), twelve (5.6° vs 2.1°)."""
+
+
+def _place_patches(V: np.ndarray, F: np.ndarray, holes, skip: dict[int, str], *, initial: str,
+                   edge_length: float | None, th: float, check: bool,
+                   progress: Callable[[int, int], None] | None, creases: bool, curvature: bool,
+                   triharmonic: bool
+                   ) -> tuple[np.ndarray, np.ndarray, list[HoleReport], float, float]:
+    """Enclose the selected holes and place their patches; returns ``(V1, F1, reports,
+    t_enclose, t_initial)`` with the refused patches already removed (their reports say why)."""
+    nV, nF = len(V), len(F)
+    by_index = {h.index: h for h in holes}
+    stage: dict[int, int] = {}  # hole index -> position in its list of enclosing methods
+    t_enclose = t_initial = 0.0
+    first = True
+    seam_prev: dict[int, float] = {}  # hole -> seam angle of its planar patch (seam trial)
+    locked: set[int] = set()
+    revert: list[int] = []
+    while True:
+        ta = time.perf_counter()
+        method = {h.index: _enclose_methods(h)[stage.get(h.index, 0)] for h in holes}
+        if first:
+            routes = find_crease_routes(V, F, holes, skip, th) if creases else {}
+            sharp_v = np.flatnonzero(_sharp_vertices(V, F, th, nV))
+        V1, F1, reports = enclose_holes(
+            V, F, holes, skip, edge_length=edge_length, check=check, intersections=False,
+            method=method, creases=routes,
+            progress=None if progress is None or not first else progress)
+        first = False
+        tb = time.perf_counter()
+        Vm = V1
+        if initial == "bilaplacian" and len(V1) > nV:
+            ce = _crease_edges(reports)
+            on_crease = np.unique(ce)
+            free = np.setdiff1d(np.arange(nV, len(V1)), on_crease)
+            V1 = fair_vertices(V1, F1, free, order=2, weights="cotan", iterations=3,
+                               exclude_rows=on_crease, curvature=curvature,
+                               curvature_exclude=sharp_v)
+            if triharmonic:
+                # curvature-continuous (triharmonic) candidate, two rings of the surround as
+                # data; kept per hole where it meets the surround more smoothly (section 3d)
+                Vt = fair_triharmonic(V1, F1, free, iterations=3,
+                                      exclude_rows=np.union1d(on_crease, sharp_v))
+                Vt = _finite_rows(Vt, V1, np.arange(nV, len(V1)), "the triharmonic fairing")
+                V1 = V1.copy()
+                by_rep = {r.index: r for r in reports}
+                for i, (bv, bf) in _blocks(reports, nV, nF).items():
+                    s_thin = _seam_angle(V1, F1, bf, nF)
+                    s_tri = _seam_angle(Vt, F1, bf, nF)
+                    if s_tri < s_thin:
+                        V1[bv] = Vt[bv]
+                        by_rep[i].reason += ", triharmonic"
+                        log.info("hole %d: triharmonic fairing kept (seam %.2f° vs thin plate "
+                                 "%.2f°)", i, s_tri, s_thin)
+            V1 = _finite_rows(V1, Vm, np.arange(nV, len(V1)), "the thin-plate fairing")
+        drop: dict[int, str] = {}
+        retry: list[int] = []
+        if check:
+            dropped = np.zeros(len(F1), bool)  # faces of patches already refused
+            blocks = _blocks(reports, nV, nF)
+            all_new = np.arange(nF, len(F1))
+            pairs0 = self_intersections(V1, F1, all_new) if len(all_new) else None
+            by_rep = {r.index: r for r in reports}
+            for i, (bv, bf) in blocks.items():
+                rep = by_rep[i]
+                n_x = _intersecting(V1, F1, bf, dropped, pairs=pairs0)
+                if n_x and initial == "bilaplacian":
+                    # keep as much of the fairing as stays clear of the surround: the patch
+                    # moved back towards its initial surface by halves, then the initial one
+                    unfaired = "unfaired" if method[i] == "liepa" else "membrane"
+                    Vf = V1[bv].copy()
+                    V1 = V1.copy()
+                    for frac in BLEND_STEPS:
+                        V1[bv] = Vm[bv] + frac * (Vf - Vm[bv])
+                        n_x = _intersecting(V1, F1, bf, dropped)
+                        if not n_x:
+                            log.info("hole %d: the faired patch intersects the mesh; kept %g of "
+                                     "the fairing", i, frac)
+                            rep.reason += f", {frac:g} faired"
+                            break
+                    if n_x:
+                        log.info("hole %d: the faired patch intersects the mesh; using the %s",
+                                 i, "unfaired surface" if unfaired == "unfaired" else "membrane")
+                        V1[bv] = Vm[bv]
+                        n_x = _intersecting(V1, F1, bf, dropped)
+                        if not n_x:
+                            rep.reason += f", {unfaired}"
+                if not n_x:
+                    # choose by measurement: a planar patch meeting its surround at a kink is
+                    # tried again with Liepa's triangulation, and the smoother seam is kept
+                    if i in seam_prev and method[i] == "liepa" and i not in locked:
+                        seam = _seam_angle(V1, F1, bf, nF)
+                        if not seam < seam_prev[i]:
+                            log.info("hole %d: the minimum-weight patch's seam (%.1f°) is no "
+                                     "smoother than the planar one (%.1f°); keeping the planar",
+                                     i, seam, seam_prev[i])
+                            revert.append(i)
+                        locked.add(i)
+                    elif (initial == "bilaplacian" and method[i] == "auto" and i not in locked
+                          and rep.n_creases == 0 and not rep.reason.startswith("annulus")
+                          and len(_enclose_methods(by_index[i])) > 1):
+                        seam, ring = _seam_angle(V1, F1, bf, nF, ring=True)
+                        if seam > SEAM_RETRY_FACTOR * ring + SEAM_RETRY_MARGIN:
+                            log.info("hole %d: the planar patch meets its surround at %.1f° "
+                                     "(surround %.1f°); trying the minimum-weight "
+                                     "triangulation", i, seam, ring)
+                            seam_prev[i] = seam
+                            retry.append(i)
+                    continue
+                if i in seam_prev and method[i] == "liepa" and i not in locked:
+                    locked.add(i)  # the seam trial intersects: back to the planar patch
+                    revert.append(i)
+                    continue
+                dropped[bf] = True
+                nxt = stage.get(i, 0) + 1
+                if nxt < len(_enclose_methods(by_index[i])) and not rep.reason.startswith(
+                        "annulus"):
+                    log.info("hole %d: the %s patch intersects the mesh (%d face pairs); "
+                             "trying %s", i, method[i], n_x, _enclose_methods(by_index[i])[nxt])
+                    retry.append(i)
+                    continue
+                tried = ", ".join(_METHOD_NAMES[m] for m in _enclose_methods(by_index[i])
+                                  ) if not rep.reason.startswith("annulus") else "annulus"
+                drop[i] = (f"the patch would intersect the surface ({n_x} face pairs; tried: "
+                           f"{tried}): the loop is too twisted for a direct fill (e.g. it wraps "
+                           "round a thin wall or is the border of an open scan: use "
+                           "keep_border); exclude it or fill it manually")
+        t_enclose += tb - ta
+        t_initial += time.perf_counter() - tb
+        if not retry and not revert:
+            break
+        for i in retry:
+            stage[i] = stage.get(i, 0) + 1
+        for i in revert:
+            stage[i] = 0
+        revert = []
+    if drop:
+        V1, F1 = _drop_patches(V1, F1, reports, nV, nF, drop)
+    return V1, F1, reports, t_enclose, t_initial
