@@ -316,5 +316,9 @@ def _run_jobs(todo, out: Path, task: str, options: dict, results: dict, *, clien
                               "running": min(left, nthreads), "total": len(todo)})
         finally:
             writer.close()
-            remove_stale_temporaries([o for _, _, o in todo])
+            swept = [o for _, _, o in todo]
+            if thumbnails:  # a worker killed while writing a thumbnail leaves its temporary too
+                swept += [out / THUMBNAILS / f"{rel}.{k}.png" for _, rel, _ in todo
+                          for k in ("before", "after")]
+            remove_stale_temporaries(swept)
 
