@@ -10,9 +10,7 @@ import json
 
 import numpy as np
 import pytest
-import scipy.sparse as sp
 import trimesh
-from scipy.sparse.csgraph import dijkstra
 from scipy.spatial import cKDTree
 
 from meshrepair.complete import (
@@ -31,6 +29,7 @@ from meshrepair.topology import boundary_loops, edge_topology
 from meshrepair.validate import check_mesh
 
 from .bundled import bundled_mesh
+from .conftest import geodesic_disc
 
 # ----------------------------------------------------------------------------------------------
 # helpers
@@ -45,16 +44,6 @@ def spot():
 def star():
     return bundled_mesh("trim_star.ply")
 
-
-def geodesic_disc(V, F, center, radius):
-    """Faces whose three vertices are within ``radius`` (edge-graph geodesic) of ``center``."""
-    topo = edge_topology(F, len(V))
-    e = topo.edges
-    w = np.linalg.norm(V[e[:, 0]] - V[e[:, 1]], axis=1)
-    G = sp.coo_matrix((np.r_[w, w], (np.r_[e[:, 0], e[:, 1]], np.r_[e[:, 1], e[:, 0]])),
-                      shape=(len(V), len(V))).tocsr()
-    d = dijkstra(G, indices=center, limit=1.5 * radius)
-    return np.flatnonzero((d[F] <= radius).all(axis=1))
 
 
 def rigid(rng, shift=1.0):

@@ -19,9 +19,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-import scipy.sparse as sp
 import trimesh
-from scipy.sparse.csgraph import dijkstra
 
 from meshrepair.complete import complete, extract_patch
 from meshrepair.correspondence import apply_transform
@@ -31,23 +29,17 @@ from meshrepair.io import read_mesh
 from meshrepair.metrics import point_to_surface
 from meshrepair.rigid import reflection
 from meshrepair.symmetry import detect_symmetry
-from meshrepair.topology import boundary_loops, edge_topology
+from meshrepair.topology import boundary_loops
 from meshrepair.validate import check_mesh
 
-from .conftest import shared_mesh
+from .conftest import geodesic_disc, shared_mesh
 
 DATA = Path(__file__).resolve().parents[1] / "src" / "meshrepair" / "data"
 DAMAGES = ("dent", "spike", "noise", "flat")
 
 
 def geodesic(V, F, center, radius):
-    topo = edge_topology(F, len(V))
-    e = topo.edges
-    w = np.linalg.norm(V[e[:, 0]] - V[e[:, 1]], axis=1)
-    G = sp.coo_matrix((np.r_[w, w], (np.r_[e[:, 0], e[:, 1]], np.r_[e[:, 1], e[:, 0]])),
-                      shape=(len(V), len(V))).tocsr()
-    d = dijkstra(G, indices=center, limit=1.5 * radius)
-    return np.flatnonzero((d[F] <= radius).all(axis=1)), d
+    return geodesic_disc(V, F, center, radius, return_distances=True)
 
 
 def random_rigid(seed, shift):
