@@ -24,6 +24,11 @@ recorded in ``DenoiseResult.params``):
    ≥ 6 edges) with ``a = 10``, and the flat-TV class (:mod:`meshrepair.priors`, MC ``a = 0.5``)
    on C's flat edges; edge-Willmore elsewhere; ``β1 = 1.2 a``, ``β2 ≈ 1.67 β1``; ≤ 60
    iterations or rule (35).
+4. *Tangential re-anchoring* of the smooth region (:mod:`meshrepair.reproject`): outside C the
+   result's vertices slide along the result surface towards the closest points of the input's
+   vertices, ``V_i + w_i (π_S(V⁰_i) - V_i)`` with the least-variance weights
+   ``w_i = σ²/(σ² + κ² d_i²)``, when the residual tangential ratio reads noise along the
+   normals (``ρ_t < 0.6``) and the noise is not heavy (:data:`REANCHOR`).
 
 Throughout: λ = ``clip(0.02 / γ̂², 0.05, 1)``; the Willmore weight ``w`` from ρ for correlated
 noise along the normals (:func:`willmore_weight_from_scale`); a Huber fidelity for impulsive
