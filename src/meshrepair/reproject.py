@@ -149,17 +149,23 @@ def closest_points_local(V: np.ndarray, F: np.ndarray, P: np.ndarray, *,
         idx = np.arange(s, min(nV, s + chunk))
         C1 = VF[idx]
         C2 = VF[near[idx]]
-        Cm = ((C1 + C2) > 0).tocoo()
-        q, f = Cm.row, Cm.col
-        if len(q) == 0:
+        Cm = (C1 + C2).tocsr()  # candidate faces per row, rows in order
+        counts = np.diff(Cm.indptr)
+        f = Cm.indices.astype(np.int64)
+        if len(f) == 0:
             continue
+        q = np.repeat(np.arange(len(idx)), counts)
         gi = idx[q]
         X = closest_point_triangles(P[gi], V[F[f, 0]], V[F[f, 1]], V[F[f, 2]])
-        d = np.einsum("ij,ij->i", X - P[gi], X - P[gi])
-        order = np.lexsort((d, q))
-        first = np.ones(len(order), bool)
-        first[1:] = q[order][1:] != q[order][:-1]
-        sel = order[first]
+        R = X - P[gi]
+        d = np.einsum("ij,ij->i", R, R)
+        rows = np.flatnonzero(counts)
+        dmin = np.minimum.reduceat(d, Cm.indptr[rows])
+        full = np.empty(len(idx))
+        full[rows] = dmin
+        hit = np.flatnonzero(d == full[q])
+        first = np.r_[True, q[hit][1:] != q[hit][:-1]]  # q is sorted: first minimiser per row
+        sel = hit[first]
         out[idx[q[sel]]] = X[sel]
     has = np.asarray(VF.sum(axis=1)).ravel() > 0
     out[~has] = V[~has]  # isolated vertices have no surface to project on
