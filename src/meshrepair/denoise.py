@@ -617,14 +617,14 @@ def _denoise(V, F, *, lam, th, a, robust_iters, feature_iters, mask_update_every
                 f"denoise collapsed this closed mesh: its volume fell to {shrink:.3g} of the "
                 f"input's even without the robust stage ({len(V)} vertices; a mesh this coarse "
                 "has no smooth regions for the model); it cannot be denoised")
+    info.update(reanchor_ratio=float("nan"), reanchored=0, reanchor_shift=0.0)
+    if REANCHOR and sup_v is not None:  # before the unfolding: it judges the final positions
+        V_out = _reanchor_smooth(V, V_out, F, topo, sup_v, max(gamma, gamma_rms), info)
     n_res_folded = 0
     if unfold and UNFOLD_RESULT:
         V_out, n_res_folded = unfold_result(V_out, topo, r1_V)
         if n_res_folded:
             log.info("unfolded %d faces folded over in the result", n_res_folded)
-    info.update(reanchor_ratio=float("nan"), reanchored=0, reanchor_shift=0.0)
-    if REANCHOR and sup_v is not None:
-        V_out = _reanchor_smooth(V, V_out, F, topo, sup_v, max(gamma, gamma_rms), info)
     return DenoiseResult(
         V=V_out,
         F=F,
