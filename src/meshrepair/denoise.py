@@ -423,8 +423,8 @@ def denoise(
         the noise (:func:`willmore_weight_from_scale`).
     regions : decide per region whether a crease is supported (:mod:`meshrepair.regions`) from a
         first robust probe, and use the smooth prior only elsewhere; ``False`` runs the MC stages
-        on the whole mesh without probe, flat-TV class, anchor or correlated-noise weight (the
-        heavy-noise and impulsive rules still apply).
+        on the whole mesh without probe, flat-TV class, anchor, correlated-noise weight or
+        tangential re-anchoring (the heavy-noise and impulsive rules still apply).
     callback : called with each iteration's history entry; raise
         :class:`meshrepair.solver.StopRequested` to stop early.
 
