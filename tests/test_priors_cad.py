@@ -140,3 +140,31 @@ def test_quality_published_tgv_fandisk_beats_meshtgv():
 
     assert msae(r.V, Vt, F) < 0.9 * msae(Vp, Vt, F)
     assert ea(r.V) < 0.98 * ea(Vp)
+
+
+def test_inner_iters_from_scale_rule():
+    """``clip(round(3 max(1, ℓ²)), 3, 12)``: 3 for one-ring noise, 6 for the Kinect scan's
+    ``ℓ = √2``, capped at 12."""
+    f = denoise_mod.inner_iters_from_scale
+    assert f(0.0) == 3 and f(1.0) == 3 and f(np.sqrt(2.0)) == 6 and f(np.sqrt(3.0)) == 9
+    assert f(4.0) == 12
+
+
+def test_more_inner_steps_follow_long_waves():
+    """The reason for the rule: a plane with correlated noise (``m = 2`` diffusion steps, the
+    Kinect scan's scale), the default two stages with the Kinect's weights (w = 16, λ = 0.17):
+    6 V-steps per iteration leave flatter faces than 3 in the same ADMM iterations (measured
+    mean normal error 3.56° → 2.63°; the noisy input has 23.5°)."""
+    from meshrepair.geometry import face_normals
+    from meshrepair.scale import correlated_noise
+
+    V, F = _plane(30)
+    V0 = correlated_noise(V, F, 0.4, 2, seed=1)
+    st = denoise_mod.default_stages(robust_iters=23, feature_iters=60)
+    err = []
+    for n_in in (3, 6):
+        opts = SolverOptions(lam=0.17, willmore_weight=16.0, stages=st, inner_iters=n_in)
+        r = ADMMSolver(F, len(V), options=opts).solve(V0)
+        nz = face_normals(r.V, F)[:, 2]
+        err.append(float(np.degrees(np.arccos(np.clip(nz, -1, 1))).mean()))
+    assert err[1] < 0.85 * err[0]
