@@ -22,14 +22,15 @@ recorded in ``DenoiseResult.params``):
    relative change of V drops below ``2e-4``.
 3. *Feature stage*: in C, M_E from the dihedral threshold (refreshed every 3 iterations, chains
    ≥ 6 edges) with ``a = 10``, and the flat-TV class (:mod:`meshrepair.priors`, MC ``a = 0.5``)
-   on C's flat edges; edge-Willmore elsewhere; ``β1 = 1.2 a``, ``β2 ≈ 1.67 β1``; ≤ 60
-   iterations or rule (35).
+   on C's flat edges; edge-Willmore elsewhere, with weight ``6 w`` outside C on CAD parts
+   (:func:`outside_weight`); ``β1 = 1.2 a``, ``β2 ≈ 1.67 β1``; ≤ 60 iterations or rule (35).
 
 Throughout: λ = ``clip(0.02 / γ̂², 0.05, 1)``; the Willmore weight ``w`` from ρ for correlated
-noise along the normals (:func:`willmore_weight_from_scale`); a Huber fidelity for impulsive
-noise (:mod:`meshrepair.fidelity`); a tangential anchor on C when the noise lies along the
-normals (r_t < 0.65). All parameters are in mean-edge-length units, so the result is
-equivariant under rotation, translation and uniform scaling.
+noise along the normals (:func:`willmore_weight_from_scale`) and then ``3 max(1, ℓ²)`` V-steps
+per iteration for its correlation length ℓ, the probe included (:func:`inner_iters_from_scale`);
+a Huber fidelity for impulsive noise (:mod:`meshrepair.fidelity`); a tangential anchor on C
+when the noise lies along the normals (r_t < 0.65). All parameters are in mean-edge-length
+units, so the result is equivariant under rotation, translation and uniform scaling.
 """
 
 from __future__ import annotations

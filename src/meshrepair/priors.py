@@ -16,6 +16,12 @@ stage:
 ``T`` the crease-supported edges. The t-subproblem (22) still separates over edges; on ``T`` it is
 the firm-thresholding prox of (23) with ``a_f`` in place of ``a`` (strongly convex since
 ``β1 > a ≥ a_f``, rule (24)). Outside ``T`` (smooth, organic regions) nothing changes.
+
+**Per-edge Willmore weight.** The Willmore class may carry one weight per edge, ``w_e`` in place
+of ``w`` (``willmore_weight`` given as an array); the t-step stays the exact minimiser of (22),
+edge by edge ``t_e = (β1 (DN)_e + ρ_{1e}) / (β1 + 2 w_e)`` (convex for every ``w_e ≥ 0``, so
+rule (24) is unchanged). :func:`meshrepair.denoise.outside_weight` uses it to give the smooth
+patches of CAD parts, outside the crease-supported region, a stronger smooth prior.
 """
 
 from __future__ import annotations
