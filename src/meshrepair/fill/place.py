@@ -13,6 +13,7 @@ import numpy as np
 
 from ..holes import LIEPA_MAX_LOOP, HoleReport, enclose_holes, fair_vertices, self_intersections
 from ..holes.creases import find_crease_routes
+from ..holes.fairing import LIEPA_COT_RANGE
 from ..holes.triharmonic import fair_triharmonic
 from .patches import (
     _blocks,
@@ -83,9 +84,20 @@ def _place_patches(V: np.ndarray, F: np.ndarray, holes, skip: dict[int, str], *,
             ce = _crease_edges(reports)
             on_crease = np.unique(ce)
             free = np.setdiff1d(np.arange(nV, len(V1)), on_crease)
-            V1 = fair_vertices(V1, F1, free, order=2, weights="cotan", iterations=3,
+            Vin = V1
+            V1 = fair_vertices(Vin, F1, free, order=2, weights="cotan", iterations=3,
                                exclude_rows=on_crease, curvature=curvature,
                                curvature_exclude=sharp_v)
+            liepa_blocks = [b for i, b in _blocks(reports, nV, nF).items()
+                            if method[i] == "liepa"]
+            if liepa_blocks:
+                # Liepa's patches: bounded cotangents (anisotropic triangles, section 3e)
+                Vc = fair_vertices(Vin, F1, free, order=2, weights="cotan", iterations=3,
+                                   exclude_rows=on_crease, curvature=curvature,
+                                   curvature_exclude=sharp_v, cot_range=LIEPA_COT_RANGE)
+                V1 = V1.copy()
+                for bv, _ in liepa_blocks:
+                    V1[bv] = Vc[bv]
             if triharmonic:
                 # curvature-continuous (triharmonic) candidate, two rings of the surround as
                 # data; kept per hole where it meets the surround more smoothly (section 3d)
