@@ -120,3 +120,24 @@ def test_cotan_weights_clipped():
     Wc = _cotan_weights_2d(X, T, 3, (0.3, 3.0)).toarray()
     assert np.isclose(Wc[1, 2], 0.5 * 3.0)
     assert np.allclose(Wc, Wc.T)
+
+
+def test_fair_vertices_clipping_only_in_marked_faces():
+    """``cot_faces``: clipping no face is the exact thin plate; clipping every face is the same
+    as ``cot_faces=None``; on an irregular surround the clipped fairing differs."""
+    from meshrepair.holes import fair_vertices
+
+    V, F = _torus(nu=48, nv=20)
+    rng = np.random.default_rng(3)
+    V = V + 0.02 * rng.standard_normal(V.shape)  # irregular angles
+    free = np.flatnonzero(np.linalg.norm(V - np.array([2.7, 0.0, 0.0]), axis=1) < 0.5)
+    Vs = V.copy()
+    Vs[free] += 0.1  # a start off the surface
+    exact = fair_vertices(Vs, F, free, iterations=2)
+    none = fair_vertices(Vs, F, free, iterations=2, cot_range=(0.3, 3.0),
+                         cot_faces=np.zeros(len(F), bool))
+    every = fair_vertices(Vs, F, free, iterations=2, cot_range=(0.3, 3.0),
+                          cot_faces=np.ones(len(F), bool))
+    default = fair_vertices(Vs, F, free, iterations=2, cot_range=(0.3, 3.0))
+    assert np.allclose(exact, none) and np.allclose(every, default)
+    assert np.abs(every - exact).max() > 1e-4

@@ -22,7 +22,8 @@ def fair_vertices(V: np.ndarray, F: np.ndarray, free: np.ndarray, *, order: int 
                   exclude_rows: np.ndarray | None = None,
                   curvature: bool = False,
                   curvature_exclude: np.ndarray | None = None,
-                  cot_range: tuple[float, float] | None = None) -> np.ndarray:
+                  cot_range: tuple[float, float] | None = None,
+                  cot_faces: np.ndarray | None = None) -> np.ndarray:
     """Move the ``free`` vertices to a fair (harmonic or bi-Laplacian) position.
 
     ``order=2`` minimises ``sum_r A_r |(Δx)_r|²`` over the free vertices and their neighbours
@@ -57,6 +58,8 @@ def fair_vertices(V: np.ndarray, F: np.ndarray, free: np.ndarray, *, order: int 
         Laplacian (bounds the weight of nearly degenerate or obtuse angles, which an
         anisotropic triangulation has: :data:`LIEPA_COT_RANGE`). The curvature measurement
         keeps the exact cotangents.
+    cot_faces : (nF,) bool, optional
+        With ``cot_range``: clip only the angles of these faces (default: all).
 
     Returns
     -------
@@ -78,7 +81,12 @@ def fair_vertices(V: np.ndarray, F: np.ndarray, free: np.ndarray, *, order: int 
     rows[F[touch].ravel()] = True
     if order == 1:
         rows = fm.copy()
-    Floc = F[rows[F].any(axis=1)]
+    in_loc = rows[F].any(axis=1)
+    Floc = F[in_loc]
+    clip_loc = None
+    if cot_range is not None:
+        clip_loc = np.ones(len(Floc), bool) if cot_faces is None else \
+            np.asarray(cot_faces, bool)[in_loc]
     ok, on_bnd = _usable_rows(F, nV, fm, exclude_rows)
     rows &= ok
     r_idx = np.flatnonzero(rows)
@@ -92,7 +100,9 @@ def fair_vertices(V: np.ndarray, F: np.ndarray, free: np.ndarray, *, order: int 
         kappa = _curvature_field(V, F, fm, rows, on_bnd, ex)
     for _ in range(max(1, iterations)):
         if weights == "cotan":
-            W = _cotan_weights_2d(V, Floc, nV, cot_range)
+            W = _cotan_weights_2d(V, Floc, nV) if clip_loc is None else (
+                _cotan_weights_2d(V, Floc[~clip_loc], nV)
+                + _cotan_weights_2d(V, Floc[clip_loc], nV, cot_range))
         else:
             e = np.sort(np.concatenate([Floc[:, [0, 1]], Floc[:, [1, 2]], Floc[:, [2, 0]]]),
                         axis=1)
