@@ -34,10 +34,11 @@ def _dir_at(angle_deg, towards):
 
 def test_kinked_pair_routed_straight():
     """Ends at opposite loop vertices, each 50° off the chord (beyond PAIR_MAX_TURN, within
-    KINKED_PAIR_TURN): one straight route between them."""
+    KINKED_PAIR_TURN), turned to opposite sides (their lines do not meet): one straight route
+    between them."""
     assert PAIR_MAX_TURN < 50.0 < KINKED_PAIR_TURN
     V = _circle()
-    ends = [_end(0, _dir_at(50.0, (-1.0, 0.0))), _end(8, _dir_at(-50.0, (1.0, 0.0)))]
+    ends = [_end(0, _dir_at(50.0, (-1.0, 0.0))), _end(8, _dir_at(50.0, (1.0, 0.0)))]
     r = route_creases(V, np.arange(16), ends)
     assert r is not None and r.kinds == ["kinked"]
     assert sorted(r.segments[0].tolist()) == [0, 8]
@@ -47,14 +48,26 @@ def test_kinked_pair_routed_straight():
 
 def test_kinked_pair_refused_beyond_turn_or_convexity():
     V = _circle()
-    too_far = [_end(0, _dir_at(70.0, (-1.0, 0.0))), _end(8, _dir_at(-70.0, (1.0, 0.0)))]
+    too_far = [_end(0, _dir_at(70.0, (-1.0, 0.0))), _end(8, _dir_at(70.0, (1.0, 0.0)))]
     assert route_creases(V, np.arange(16), too_far) is None
     mixed = [_end(0, _dir_at(50.0, (-1.0, 0.0))),
-             _end(8, _dir_at(-50.0, (1.0, 0.0)), convex=False)]
+             _end(8, _dir_at(50.0, (1.0, 0.0)), convex=False)]
     assert route_creases(V, np.arange(16), mixed) is None
     gap = [_end(0, _dir_at(50.0, (-1.0, 0.0)), angle=40.0),
-           _end(8, _dir_at(-50.0, (1.0, 0.0)), angle=80.0)]
+           _end(8, _dir_at(50.0, (1.0, 0.0)), angle=80.0)]
     assert route_creases(V, np.arange(16), gap) is None
+
+
+def test_kinked_pair_refused_when_the_lines_meet_ahead():
+    """Both ends turned 50° to the same side: their lines meet in front of both, two creases of
+    a corner whose third crease was not found (fandisk creases r=16), not one kinked crease."""
+    from meshrepair.holes.creases import _lines_meet_ahead
+
+    V = _circle()
+    a, b = _dir_at(50.0, (-1.0, 0.0)), _dir_at(-50.0, (1.0, 0.0))
+    assert _lines_meet_ahead(V[0], a, V[8], b)
+    assert not _lines_meet_ahead(V[0], a, V[8], _dir_at(50.0, (1.0, 0.0)))
+    assert route_creases(V, np.arange(16), [_end(0, a), _end(8, b)]) is None
 
 
 def test_kinked_pair_one_end_per_chain():
@@ -63,8 +76,8 @@ def test_kinked_pair_one_end_per_chain():
     two are never paired with each other."""
     V = _circle()
     ends = [_end(0, _dir_at(50.0, (-1.0, 0.0))),
-            _end(8, _dir_at(-45.0, (1.0, 0.0)), chain_id=7),
-            _end(9, _dir_at(-55.0, V[0] - V[9]), chain_id=7)]
+            _end(8, _dir_at(45.0, (1.0, 0.0)), chain_id=7),
+            _end(9, _dir_at(50.0, V[0] - V[9]), chain_id=7)]
     pairs = _kinked_pairs(V, ends)
     assert len(pairs) == 1 and pairs[0][0] == 0 and pairs[0][1] in (1, 2)
     for j in (1, 2):  # each alone would be paired with end 0
@@ -85,5 +98,5 @@ def test_kinked_pair_not_through_the_surround():
     k = len(P)
     a, b = 0, 12  # the two outer tips of the C, the chord crossing its mouth
     s = V[b] - V[a]
-    ends = [_end(a, _dir_at(40.0, s[:2])), _end(b, _dir_at(-40.0, -s[:2]))]
+    ends = [_end(a, _dir_at(40.0, s[:2])), _end(b, _dir_at(40.0, -s[:2]))]
     assert route_creases(V, np.arange(k), ends) is None

@@ -420,6 +420,20 @@ KINKED_PAIR_TURN = 60.0
 partner for a *kinked pair* (:func:`_kinked_pairs`)."""
 
 
+def _lines_meet_ahead(pa: np.ndarray, da: np.ndarray, pb: np.ndarray, db: np.ndarray) -> bool:
+    """The lines ``pa + t da`` and ``pb + u db`` pass within :data:`CORNER_TOL` of the
+    distance of each other at ``t, u > 0`` (in front of both ends)."""
+    w = pa - pb
+    A = np.array([[da @ da, -(da @ db)], [da @ db, -(db @ db)]])
+    try:
+        t, u = np.linalg.solve(A, [-(w @ da), -(w @ db)])
+    except np.linalg.LinAlgError:
+        return False
+    if not (t > 0 and u > 0):
+        return False
+    return float(np.linalg.norm(pa + t * da - pb - u * db)) <= CORNER_TOL * min(t, u)
+
+
 def _kinked_pairs(P: np.ndarray, ends: list[CreaseEnd]) -> list[tuple[int, int]]:
     """Pairs of crease ends left over by the pairs, corners and T-junctions that are one crease
     kinking where it meets the loop: same convexity, dihedral angles within
@@ -428,7 +442,9 @@ def _kinked_pairs(P: np.ndarray, ends: list[CreaseEnd]) -> list[tuple[int, int]]
     directions) within :data:`PAIR_MAX_TILT` of the plane the hole spans. Greedy by alignment;
     the chord inside the loop seen through its vector area (a chord passing over the surround
     joins two different creases); two ends of one chain (the loop cutting a crease at two
-    neighbouring vertices, :attr:`CreaseEnd.chain_id`) are never both used. Routed straight:
+    neighbouring vertices, :attr:`CreaseEnd.chain_id`) are never both used; two ends whose
+    lines meet in front of both (:func:`_lines_meet_ahead`) are two creases of a corner whose
+    third crease was not found (fandisk creases r=16), not one crease. Routed straight:
     on trim_star crease r=8 the crease arriving at one end bends by 58° there (its chain
     outside zigzags by 15-30° per edge), while inside the hole it turns by 24° in all."""
     from ._geom2d import _vector_area
@@ -469,6 +485,8 @@ def _kinked_pairs(P: np.ndarray, ends: list[CreaseEnd]) -> list[tuple[int, int]]
             if poly is not None and not poly.contains_points(
                     Q[ea.pos] + t_in * (Q[eb.pos] - Q[ea.pos])).all():
                 continue  # the chord passes over the surround: not one crease across the hole
+            if _lines_meet_ahead(P[ea.pos], ea.direction, P[eb.pos], eb.direction):
+                continue  # two creases meeting at a corner whose third crease was not found
             cand.append((ca + cb, a, b))
     cand.sort(reverse=True)
     used: set[int] = set()
