@@ -222,13 +222,14 @@ class PhaseTimer:
     ``meshrepair.solver``, functions of ``meshrepair`` modules it references, methods of the
     ``meshrepair`` classes it uses) is wrapped with a timer; nested calls count for the outermost
     wrapped call. The step in progress is switched at a few stable anchors of the scheme (17)-(21):
-    the denoise callback (end of an iteration -> t-update), ``t_update`` exit (-> N-update),
+    the denoise callback (end of an iteration -> t-update), ``t_update`` or ``t_from_normals`` exit
+    (-> N-update),
     ``run_inner`` (V-update), its exit (-> multipliers), ``ADMMSolver._mask``,
     ``ADMMSolver.energy``. Unwrapped numpy code between wrapped calls goes to the step in
     progress, so the steps add up to the solver time. Anchors that no longer exist are reported.
     """
 
-    T, N, V, MU = ("t-update (17) incl. edge lengths, D·N",
+    T, N, V, MU = ("t-update (17) incl. D·N",
                    "N-update (18)/(25): assemble, RHS, solve, normalise",
                    "V-update (19)/(26): inner solver",
                    "multipliers (20)-(21), residuals, rel. change")
@@ -237,10 +238,10 @@ class PhaseTimer:
                 "ADMMSolver.energy": H, "_kernels.reg_energy": H,
                 "_fused.lengths_reg_energy": "new edge lengths + history energy (6) + entry",
                 "TangentialRelaxer.step": "tangential relaxation"}
-    ON_EXIT = {"t_update": N, "run_inner": MU, "TangentialRelaxer.step": MU,
+    ON_EXIT = {"t_update": N, "t_from_normals": N, "run_inner": MU, "TangentialRelaxer.step": MU,
                "ADMMSolver._mask": T}
     # (alternatives: the history energy was ADMMSolver.energy, then _kernels.reg_energy)
-    ANCHORS = ("t_update", "run_inner", "ADMMSolver._mask",
+    ANCHORS = ("t_update|t_from_normals", "run_inner", "ADMMSolver._mask",
                "ADMMSolver.energy|_kernels.reg_energy|_fused.lengths_reg_energy")
 
     def __init__(self):
