@@ -237,15 +237,12 @@ class PhaseTimer:
     ON_ENTER = {"run_inner": V, "ADMMSolver._mask": "mask M_E (dihedral threshold, chains)",
                 "ADMMSolver.energy": H, "_kernels.reg_energy": H,
                 "_fused.lengths_reg_energy": "new edge lengths + history energy (6) + entry",
-                "_fused.rho1_lengths_reg_energy":
-                    "multiplier (20) + new edge lengths + history energy (6) + entry",
                 "TangentialRelaxer.step": "tangential relaxation"}
     ON_EXIT = {"t_update": N, "t_from_normals": N, "run_inner": MU, "TangentialRelaxer.step": MU,
                "ADMMSolver._mask": T}
     # (alternatives: the history energy was ADMMSolver.energy, then _kernels.reg_energy)
     ANCHORS = ("t_update|t_from_normals", "run_inner", "ADMMSolver._mask",
-               "ADMMSolver.energy|_kernels.reg_energy|_fused.lengths_reg_energy"
-               "|_fused.rho1_lengths_reg_energy")
+               "ADMMSolver.energy|_kernels.reg_energy|_fused.lengths_reg_energy")
 
     def __init__(self):
         self.depth = 0

@@ -257,21 +257,6 @@ def test_fused_multiplier_and_history_kernels_agree(mesh, rng):
     l2 = K._np_edge_lengths(V, E)
     assert np.allclose(l1, l2, rtol=1e-15)
     assert e1 == pytest.approx(K._np_reg_energy(Nv2, l2, fa, fb, sharp, 10.0, 1.0), rel=1e-12)
-    # (20) with the old lengths + the new lengths and regulariser: the separate kernels' values
-    t = rng.normal(size=(len(ie), 3))
-    lo = 0.9 * l2
-    q1, q2, q3 = (rng.normal(size=(len(ie), 3)) for _ in range(3))
-    q2[:], q3[:] = q1, q1
-    l3, s3, e3 = FU._nb_rho1_lengths_reg_energy(t, N, lo, q1, 1.5, V, E, Nv2, fa, fb, sharp,
-                                                10.0, 1.0)
-    s4 = K._nb_update_rho1(t, N, lo, fa, fb, q2, 1.5)
-    assert np.array_equal(q1, q2) and np.array_equal(l3, l1)
-    assert s3 == pytest.approx(s4, rel=1e-12) and e3 == pytest.approx(e1, rel=1e-12)
-    s5 = K._np_update_rho1(t, N, lo, fa, fb, q3, 1.5)
-    assert np.allclose(q3, q1, rtol=1e-14, atol=1e-14) and s5 == pytest.approx(s3, rel=1e-12)
-    l6, s6, e6 = FU.rho1_lengths_reg_energy(t, N, lo, q3, 1.5, V, E, Nv2, fa, fb, sharp, 10.0,
-                                            1.0)
-    assert np.array_equal(l6, l1) and s6 == pytest.approx(s3, rel=1e-12)
 
 
 @pytest.mark.parametrize("a,a_flat,beta1,w", [(10.0, 0.5, 12.0, 1.0), (0.5, 0.5, 1.0, 3.0),

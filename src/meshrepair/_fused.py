@@ -18,8 +18,7 @@ a numpy temporary ``V + s d`` plus one energy pass. Here:
 The ADMM loop's relative change of V (rule (35)) is :func:`rel_change`: one pass, no
 temporaries. :func:`normals_update_rho2` computes the normals of the new V and the multiplier
 update (21) in one face pass; :func:`lengths_reg_energy` the new edge lengths and the
-regulariser of (6) (the history energy) in one edge pass, and :func:`rho1_lengths_reg_energy`
-the same pass with the multiplier update (20) before it.
+regulariser of (6) (the history energy) in one edge pass.
 
 Each kernel has a numpy twin (``tests/test_kernels.py`` checks they agree). The compiled face
 passes of :func:`venergy_grad_hdiag`, :func:`venergy_trial` and :func:`normals_update_rho2`
@@ -40,7 +39,7 @@ if HAVE_NUMBA:
     # _kernels.faces / _kernels.admm (inlined helpers there), so they are compiled there; the
     # two passes below share none
     from ._kernels import njit
-    from ._kernels.admm import _nb_lengths_reg_energy, _nb_rho1_lengths_reg_energy
+    from ._kernels.admm import _nb_lengths_reg_energy
     from ._kernels.faces import (
         _nb_normals_update_rho2,
         _nb_venergy_grad_hdiag,
@@ -92,20 +91,6 @@ def lengths_reg_energy(V, E, Nv, fa, fb, sharp, a, w):
         return l, float(e)
     l = _k.edge_lengths(V, E)
     return l, _k.reg_energy(Nv, l, fa, fb, sharp, a, w)
-
-
-def rho1_lengths_reg_energy(t, N, l, rho1, beta1, V, E, Nv, fa, fb, sharp, a, w):
-    """The multiplier update (20) ``ρ1 -= β1 (t - D N)`` in place, ``D`` with the lengths ``l``
-    of the previous V, then the new lengths of the interior edges ``E`` of ``V`` and the
-    regulariser of (6) there, in one edge pass; returns ``(l_new, ||t - DN||², energy)`` (the
-    values of ``_kernels.update_rho1`` followed by :func:`lengths_reg_energy`)."""
-    if HAVE_NUMBA:
-        ln, s, e = _nb_rho1_lengths_reg_energy(t, N, l, rho1, float(beta1), V, E, Nv, fa, fb,
-                                               sharp, float(a), float(w))
-        return ln, float(s), float(e)
-    s = _k.update_rho1(t, N, l, fa, fb, rho1, beta1)
-    ln, e = lengths_reg_energy(V, E, Nv, fa, fb, sharp, a, w)
-    return ln, s, e
 
 
 def _np_rel_change(A, B):

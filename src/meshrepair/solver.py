@@ -394,16 +394,14 @@ class ADMMSolver:
                         Vn = tangential_anchor(Vn, X0, F, self.anchor)
                     if stage.relax > 0:
                         Vn = self.relaxer.step(Vn, sharp, stage.relax)
-                    # (21) multiplier, with the normals of the new V
+                    # (20)-(21) multipliers (D with the lengths of V^(k), as in the N-update)
+                    res_t = _k.update_rho1(t, N, l, fa, fb, rho1, beta1)
                     Nv, res_n = _fused.normals_update_rho2(Vn, F, N, rho2, beta2)
                     rel = _fused.rel_change(Vn, V)
                     V = Vn
                     k += 1
-                    # (20) multiplier (D with the lengths of V^(k), as in the N-update), then
-                    # the new lengths and the regulariser of (6), in one edge pass
-                    l, res_t, reg = _fused.rho1_lengths_reg_energy(
-                        t, N, l, rho1, beta1, V, E_int, Nv, fa, fb, sh, stage.a,
-                        o.willmore_weight)
+                    l, reg = _fused.lengths_reg_energy(V, E_int, Nv, fa, fb, sh, stage.a,
+                                                       o.willmore_weight)
                     if mixed:  # flat-TV edges: replace their Willmore value by the MC value
                         f = np.flatnonzero(fl & ~sh)
                         tf = l[f, None] * (Nv[fa[f]] - Nv[fb[f]])

@@ -265,31 +265,6 @@ if HAVE_NUMBA:
         return l, e
 
     @njit(cache=True, fastmath=FASTMATH)
-    def _nb_rho1_lengths_reg_energy(t, N, l, rho1, beta1, V, E, Nv, fa, fb, sharp, a, w
-                                    ):  # pragma: no cover - compiled
-        # meshrepair._fused.rho1_lengths_reg_energy: _nb_update_rho1 (with the old lengths l)
-        # and _nb_lengths_reg_energy (the new lengths of V) in one edge pass
-        ln = np.empty(E.shape[0])
-        knee = np.sqrt(2.0 / a)
-        s2a = np.sqrt(2.0 * a)
-        s = 0.0
-        e = 0.0
-        for i in range(E.shape[0]):
-            p, q, lo = fa[i], fb[i], l[i]
-            for k in range(3):
-                r = t[i, k] - lo * (N[p, k] - N[q, k])
-                rho1[i, k] -= beta1 * r
-                s += r * r
-            u, v = E[i, 0], E[i, 1]
-            dx = V[v, 0] - V[u, 0]
-            dy = V[v, 1] - V[u, 1]
-            dz = V[v, 2] - V[u, 2]
-            le = np.sqrt(dx * dx + dy * dy + dz * dz)
-            ln[i] = le
-            e += _edge_reg(Nv, p, q, le, sharp[i], a, w, knee, s2a)
-        return ln, s, e
-
-    @njit(cache=True, fastmath=FASTMATH)
     def _nb_sqdist(A, B, wts):  # pragma: no cover - compiled
         s = 0.0
         for i in range(A.shape[0]):
