@@ -9,6 +9,10 @@ on a cached benchmark mesh (``$TMPDIR/meshrepair-bench-cache/*.npz``, made by th
 
 Arguments: ``NPZ K [ITERS]`` (``ITERS`` > 0 caps the schedule at ITERS/2 robust + ITERS/2
 feature iterations; 0 or absent: the full default schedule).
+
+Each call prints one line: its wall time, the time and iterations of each solver run inside it
+(with the default schedule: the robust probe, then the main run) and the rest (validation,
+topology, ordering, noise statistics, regions, unfolding), and the process's peak RSS so far.
 """
 
 import os
@@ -27,9 +31,31 @@ if __name__ == "__main__":
     Vn, F = z["Vn"], z["F"]
     k = int(sys.argv[2])
     its = int(sys.argv[3]) if len(sys.argv) > 3 else 0
+    import resource
+    import time
+
+    import meshrepair.solver as solver
     from meshrepair import denoise
 
+    runs = []
+    orig = solver.ADMMSolver.solve
+
+    def timed_solve(self, *a, **kw):
+        t = time.perf_counter()
+        r = orig(self, *a, **kw)
+        runs.append((time.perf_counter() - t, r.iterations))
+        return r
+
+    solver.ADMMSolver.solve = timed_solve
     kw = {} if its == 0 else {"robust_iters": its // 2, "feature_iters": its - its // 2}
     with threadpool_limits(1):
         for _ in range(k):
+            runs.clear()
+            t0 = time.perf_counter()
             denoise(Vn, F, **kw)
+            total = time.perf_counter() - t0
+            rss = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+            print(f"denoise {total:.2f} s; solver runs: "
+                  + ", ".join(f"{s:.2f} s ({n} its)" for s, n in runs)
+                  + f"; outside them {total - sum(s for s, _ in runs):.2f} s; "
+                  f"peak RSS {rss:.0f} MB", flush=True)

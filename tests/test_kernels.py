@@ -193,6 +193,18 @@ def test_fused_armijo_kernels_agree_with_numpy(mesh, rng):
     assert np.allclose(o1, V + 0.3 * d1, rtol=1e-15, atol=1e-15) and np.allclose(o1, o2)
     assert t1 == pytest.approx(t2, rel=1e-12)
     assert t1 == pytest.approx(K._nb_venergy(V + 0.3 * d1, F, z, V0, w), rel=1e-14)
+    # trial point with the gradient: the values of the trial kernel + the gradient kernel there
+    o3, g4 = np.empty_like(V), np.empty_like(V)
+    e5 = FU._nb_venergy_grad_trial(V, d1, 0.3, o3, F, z, V0, w, g4)
+    g5 = np.empty_like(V)
+    e6 = K._nb_venergy_grad(o1, F, z, V0, w, g5)
+    assert np.array_equal(o3, o1) and np.array_equal(g4, g5) and e5 == e6
+    e7, g7 = FU.venergy_grad_trial(V, d1, 0.3, np.empty_like(V), F, z, V0, w)
+    assert e7 == e5 and np.array_equal(g7, g4)
+    o4 = np.empty_like(V)
+    np.add(V, 0.3 * d1, out=o4)
+    e8, g8 = FU._np_venergy_grad(o4, F, z, V0, w, S)
+    assert e8 == pytest.approx(e5, rel=1e-12) and np.allclose(g8, g4, rtol=1e-10, atol=1e-12)
 
 
 def test_rel_change_kernel_agrees(mesh, rng):
@@ -245,3 +257,69 @@ def test_fused_multiplier_and_history_kernels_agree(mesh, rng):
     l2 = K._np_edge_lengths(V, E)
     assert np.allclose(l1, l2, rtol=1e-15)
     assert e1 == pytest.approx(K._np_reg_energy(Nv2, l2, fa, fb, sharp, 10.0, 1.0), rel=1e-12)
+
+
+@pytest.mark.parametrize("a,a_flat,beta1,w", [(10.0, 0.5, 12.0, 1.0), (0.5, 0.5, 1.0, 3.0),
+                                              (0.25, 0.0, 0.5, 16.0)])
+@pytest.mark.parametrize("with_flat", [False, True])
+def test_fused_t_update_matches_separate_kernels(mesh, rng, a, a_flat, beta1, w, with_flat):
+    from meshrepair._kernels.tstep import _np_t_from_normals, t_from_normals
+    from meshrepair.penalties import t_update
+    from meshrepair.priors import t_update_mixed
+
+    V, F = mesh
+    topo = edge_topology(F, len(V))
+    fa, fb = topo.edge_faces[:, 0].copy(), topo.edge_faces[:, 1].copy()
+    N = K._np_face_normals(V, F)
+    l = 3.0 * K._np_edge_lengths(V, topo.edges)
+    rho1 = 0.3 * rng.normal(size=(len(fa), 3))
+    sharp = rng.random(len(fa)) < 0.3
+    flat = (rng.random(len(fa)) < 0.4) if with_flat else None
+    bt = max(beta1, 1.01 * a_flat)
+    DN = K._nb_grad_edges(N, l, fa, fb)
+    if with_flat:
+        t0 = t_update_mixed(DN, rho1, sharp, flat, a=a, a_flat=a_flat, beta1=bt,
+                            willmore_weight=w)
+    else:
+        t0 = t_update(DN, rho1, sharp, a=a, beta1=bt, willmore_weight=w)
+    t1 = t_from_normals(N, l, fa, fb, rho1, sharp, flat, a=a, a_flat=a_flat, beta1=bt, w=w)
+    t2 = _np_t_from_normals(N, l, fa, fb, rho1, sharp, flat, a, a_flat, bt, w)
+    # equal to rounding (bit for bit on the machine measured: the same IEEE operations)
+    assert np.allclose(t1, t0, rtol=1e-14, atol=1e-15)
+    assert np.allclose(t2, t0, rtol=1e-14, atol=1e-15)
+    # every class is exercised: shrunk to zero, partly shrunk, Willmore
+    n = np.linalg.norm(t1, axis=1)
+    willmore = ~sharp if flat is None else ~sharp & ~flat
+    assert (n[sharp] == 0).any() and (n[sharp] > 0).any() and (n[willmore] > 0).all()
+    with pytest.raises(ValueError, match="rule \\(24\\)"):
+        t_from_normals(N, l, fa, fb, rho1, sharp, flat, a=a, a_flat=a_flat, beta1=0.5 * a, w=w)
+
+
+def test_anchor_step_kernel_agrees(mesh, rng):
+    from meshrepair._kernels.anchor import _nb_anchor_step, _np_anchor_step
+    from meshrepair.fidelity import tangential_anchor
+
+    V, F = mesh
+    V0 = V + 0.1 * rng.normal(size=V.shape)
+    n = K._np_vertex_normals(V, F)
+    w = rng.random(len(V))
+    out = _nb_anchor_step(V, V0, n, w)
+    assert np.allclose(out, _np_anchor_step(V, V0, n, w), rtol=0, atol=1e-14)
+    # w = 1 projects onto the normal line through V0: the tangential part of V - V0 vanishes
+    one = tangential_anchor(V, V0, F, np.ones(len(V)))
+    d = one - V0
+    assert np.abs(d - np.einsum("ij,ij->i", d, n)[:, None] * n).max() < 1e-12
+
+
+def test_signed_volume_kernel_agrees(mesh):
+    from meshrepair._kernels.faces import _nb_signed_volume, _np_signed_volume
+
+    V, F = mesh
+    c = V.mean(axis=0)
+    v1, v2 = _nb_signed_volume(V, F, c), _np_signed_volume(V, F, c)
+    assert v1 == pytest.approx(v2, rel=1e-12)
+    # a closed mesh: the volume does not depend on the centre; the unit icosphere ≈ 4π/3
+    assert _nb_signed_volume(V, F, c + 5.0) == pytest.approx(v1, rel=1e-9)
+    m = trimesh.creation.icosphere(3)
+    Vs, Fs = np.asarray(m.vertices), np.asarray(m.faces, dtype=np.int64)
+    assert _nb_signed_volume(Vs, Fs, np.zeros(3)) == pytest.approx(m.volume, rel=1e-12)

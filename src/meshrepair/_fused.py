@@ -12,7 +12,8 @@ a numpy temporary ``V + s d`` plus one energy pass. Here:
   (same arithmetic as ``_kernels.venergy_grad`` and ``_kernels.vhess_diag``: results equal);
 * :func:`descent_direction`: ``d = -g / max(h, h_min)`` and ``⟨g, -d⟩`` in one vertex pass;
 * :func:`venergy_trial`: writes ``V + s d`` into a reused buffer and evaluates (26) there, in one
-  vertex pass and one face pass.
+  vertex pass and one face pass; :func:`venergy_grad_trial` the same with the gradient (28) (for
+  a trial after a rejected one, which is then usually accepted: its gradient is needed next).
 
 The ADMM loop's relative change of V (rule (35)) is :func:`rel_change`: one pass, no
 temporaries. :func:`normals_update_rho2` computes the normals of the new V and the multiplier
@@ -39,7 +40,12 @@ if HAVE_NUMBA:
     # two passes below share none
     from ._kernels import njit
     from ._kernels.admm import _nb_lengths_reg_energy
-    from ._kernels.faces import _nb_normals_update_rho2, _nb_venergy_grad_hdiag, _nb_venergy_trial
+    from ._kernels.faces import (
+        _nb_normals_update_rho2,
+        _nb_venergy_grad_hdiag,
+        _nb_venergy_grad_trial,
+        _nb_venergy_trial,
+    )
 
     @njit(cache=True, fastmath=FASTMATH)
     def _nb_descent_direction(g, h, h_min, d):  # pragma: no cover - compiled
@@ -111,6 +117,18 @@ def _np_descent_direction(g, h, h_min, d):
 def _np_venergy_trial(V, d, step, out, F, z, V0, wfid):
     np.add(V, step * d, out=out)
     return _np_venergy(out, F, z, V0, wfid)
+
+
+def venergy_grad_trial(V, d, step, out, F, z, V0, wfid, S=None):
+    """Write ``V + step d`` into ``out`` and return the energy (26) and gradient (28) there
+    (one vertex pass and one face pass; the values of ``venergy_trial`` followed by
+    ``_kernels.venergy_grad(out, ...)``)."""
+    if HAVE_NUMBA:
+        grad = np.empty_like(V)
+        e = _nb_venergy_grad_trial(V, d, float(step), out, F, z, V0, wfid, grad)
+        return float(e), grad
+    np.add(V, step * d, out=out)
+    return _np_venergy_grad(out, F, z, V0, wfid, S)
 
 
 def venergy_grad_hdiag(V, F, z, V0, wfid, S=None):

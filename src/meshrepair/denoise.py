@@ -122,16 +122,12 @@ def locality_order(V: np.ndarray, F: np.ndarray) -> tuple[np.ndarray, np.ndarray
     return pv, pf
 
 
-def _edge_values_to(topo, edges_old_ids: np.ndarray, values: np.ndarray) -> np.ndarray:
-    """Re-index per-edge ``values`` given on ``edges_old_ids`` (vertex ids of ``topo``) onto
-    ``topo.edges``."""
-    n = np.int64(topo.n_vertices)
-    e = np.sort(edges_old_ids, axis=1)
-    code_src = e[:, 0] * n + e[:, 1]
-    code_dst = topo.edges[:, 0] * n + topo.edges[:, 1]  # sorted (np.unique order)
-    pos = np.searchsorted(code_dst, code_src)
-    out = np.zeros(len(code_dst), dtype=values.dtype)
-    out[pos] = values
+def _edge_values_to(topo, topo_w, pf: np.ndarray, values: np.ndarray) -> np.ndarray:
+    """Re-index per-edge ``values`` of the reordered mesh ``topo_w`` (its face m is face
+    ``pf[m]`` of ``topo``, corners in the same order) onto ``topo.edges``, through the face-edge
+    tables (edge k of a face joins its corners k and k + 1): two gathers instead of a search."""
+    out = np.zeros(topo.n_edges, dtype=values.dtype)
+    out[topo.face_edges[pf]] = values[topo_w.face_edges]
     return out
 
 
@@ -520,16 +516,14 @@ def _volume_ratio(V: np.ndarray, V_out: np.ndarray, F: np.ndarray, report) -> fl
     if not report.is_closed or len(F) == 0:
         return None
 
-    def vol(X):
-        a, b, c = X[F[:, 0]], X[F[:, 1]], X[F[:, 2]]
-        return float(np.einsum("ij,ij->i", a, np.cross(b, c)).sum() / 6.0)
+    from ._kernels.faces import signed_volume
 
-    Vc = V - V.mean(axis=0)
-    v_in = vol(Vc)
+    c = V.mean(axis=0)
+    v_in = signed_volume(V, F, c)
     diag = float(np.linalg.norm(np.ptp(V, axis=0)))
     if not np.isfinite(v_in) or abs(v_in) <= 1e-6 * diag**3:
         return None
-    return vol(V_out - V.mean(axis=0)) / v_in
+    return signed_volume(V_out, F, c) / v_in
 
 
 def _denoise(V, F, *, lam, th, a, robust_iters, feature_iters, mask_update_every,
@@ -662,7 +656,7 @@ def _denoise(V, F, *, lam, th, a, robust_iters, feature_iters, mask_update_every
                          flat_edges=flat, anchor=anchor, willmore_edges=wedges
                          ).solve(Vd, Vi, callback=callback)
         if reorder:
-            return res, res.V[inv], _edge_values_to(topo, pv[res.edges], res.M_E)
+            return res, res.V[inv], _edge_values_to(topo, topo_w, pf, res.M_E)
         return res, res.V, res.M_E
 
     res, V_out, M_E = solve(stages)

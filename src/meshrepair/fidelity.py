@@ -105,7 +105,9 @@ def tangential_anchor(V: np.ndarray, V0: np.ndarray, F: np.ndarray, weight: np.n
     -------
     (nV, 3) new array
     """
-    n = _k.vertex_normals(np.ascontiguousarray(V), F)
-    d = V - V0
-    dt = d - np.einsum("ij,ij->i", d, n)[:, None] * n
-    return V - np.asarray(weight, dtype=np.float64)[:, None] * dt
+    from ._kernels.anchor import anchor_step
+
+    V = np.ascontiguousarray(V, dtype=np.float64)
+    n = _k.vertex_normals(V, F)
+    return anchor_step(V, np.ascontiguousarray(V0, dtype=np.float64), n,
+                       np.ascontiguousarray(weight, dtype=np.float64))

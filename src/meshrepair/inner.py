@@ -86,6 +86,18 @@ class VSubproblem:
         self.n_energy += 1
         return _fused.venergy_trial(V, d, step, out, self.F, self.z, self.V0, self.wfid)
 
+    def energy_grad_at(self, V: np.ndarray, d: np.ndarray, step: float, out: np.ndarray
+                       ) -> tuple[float, np.ndarray]:
+        """Write ``V + step d`` into ``out`` and return ``(J_V, ∇J_V)`` there (one fused pass;
+        the values of :meth:`energy_grad` at ``out``)."""
+        self.n_energy += 1
+        self.n_grad += 1
+        e, grad = _fused.venergy_grad_trial(V, d, step, out, self.F, self.z, self.V0, self.wfid,
+                                            self.S)
+        if self.free is not None:
+            grad[~self.free] = 0.0
+        return e, grad
+
     def diag_scale(self, V: np.ndarray) -> np.ndarray:
         """Per-vertex diagonal scale of the Hessian of (26) at ``V`` (see ``vhess_diag``)."""
         h = _k.vhess_diag(V, self.F, self.z, self.wfid)
@@ -123,7 +135,11 @@ def solve_armijo(prob: VSubproblem, V: np.ndarray, iters: int, state: InnerState
     The preconditioned path runs on fused passes (:mod:`meshrepair._fused`): the scale comes
     with the first gradient, the direction and its slope in one vertex pass, and each trial point
     is written into one of two reused buffers while its energy is evaluated (``V`` itself is never
-    written). The iterates are those of the unfused loop.
+    written). A trial after a rejected one (usually accepted) also evaluates the gradient in its
+    pass (:meth:`VSubproblem.energy_grad_at`), which saves the separate gradient pass after
+    acceptance. The iterates are those of the unfused loop (that trial's energy comes from the
+    gradient kernel, which rounds differently from the energy kernel: a test within rounding of
+    its threshold could go the other way).
     """
     if not state.precondition:
         return _solve_armijo_plain(prob, V, iters, state)
@@ -137,18 +153,31 @@ def solve_armijo(prob: VSubproblem, V: np.ndarray, iters: int, state: InnerState
         if gg == 0.0:
             break
         out = bufs[it % 2]
+        need_grad = it + 1 < iters
+        rejected = False
+        g_out = None
         while step > 1e-14:  # (31) along d, slope -gg
-            En = prob.energy_at(V, d, step, out)
+            if need_grad and rejected:
+                # after a rejected trial the next one is usually accepted: its gradient, needed
+                # next, comes from the same pass (and so does its energy, the value the next
+                # iteration's test uses in any case)
+                En, g_out = prob.energy_grad_at(V, d, step, out)
+            else:
+                En = prob.energy_at(V, d, step, out)
             if En <= E + c1 * step * -gg:
                 break
             step *= shrink
+            rejected = True
         else:
             step = state.step
             break
         V, E = out, En
         state.step = step
-        if it + 1 < iters:
-            E, g = prob.energy_grad(V)
+        if need_grad:
+            if g_out is not None:
+                g = g_out
+            else:
+                E, g = prob.energy_grad(V)
             step *= 2.0
     return V
 

@@ -29,11 +29,12 @@ import numpy as np
 
 from . import _fused
 from . import _kernels as _k
+from ._kernels.tstep import t_from_normals
 from ._memory import heap_allocations
 from .fidelity import prox_group_l1, tangential_anchor
 from .inner import INNER_SOLVERS, InnerState, VSubproblem, run_inner
 from .linear import N_SOLVERS, NormalSystem, solve_normals
-from .penalties import mc_penalty, t_update
+from .penalties import mc_penalty
 from .priors import reg_energy_mixed, t_update_mixed
 from .relax import TangentialRelaxer
 from .topology import Topology, edge_topology
@@ -379,19 +380,24 @@ class ADMMSolver:
                         src = N if o.mask_source == "N" else _k.face_normals(V, F)
                         sharp = self._mask("adaptive", src, given_mask)
                         sh = sharp[self.ie]
-                    # (17) t-update
-                    DN = _k.grad_edges(N, l, fa, fb)
+                    # (17) t-update from N (t_update / t_update_mixed on D N, one edge pass)
                     mixed = stage.flat_a > 0 and self._flat_int is not None
                     w_int = self._w_int if stage.willmore_edges else None
-                    if mixed or w_int is not None:
+                    if w_int is not None:  # per-edge Willmore weights: D N, then the prox
                         fl = self._flat_int if mixed else None
-                        t = t_update_mixed(DN, rho1, sh, fl, a=stage.a, a_flat=stage.flat_a,
+                        t = t_update_mixed(_k.grad_edges(N, l, fa, fb), rho1, sh, fl,
+                                           a=stage.a, a_flat=stage.flat_a,
                                            beta1=max(beta1, 1.01 * stage.flat_a),
-                                           willmore_weight=(o.willmore_weight if w_int is None
-                                                            else w_int))
+                                           willmore_weight=w_int)
+                    elif mixed:
+                        fl = self._flat_int
+                        t = t_from_normals(N, l, fa, fb, rho1, sh, fl, a=stage.a,
+                                           a_flat=stage.flat_a,
+                                           beta1=max(beta1, 1.01 * stage.flat_a),
+                                           w=o.willmore_weight)
                     else:
-                        t = t_update(DN, rho1, sh, a=stage.a, beta1=beta1,
-                                     willmore_weight=o.willmore_weight)
+                        t = t_from_normals(N, l, fa, fb, rho1, sh, a=stage.a, beta1=beta1,
+                                           w=o.willmore_weight)
                     # (18) N-update via (25), then normalise
                     c = beta2 / beta1
                     B = _k.rhs(c, Nv, rho2, beta1, t, rho1, l, fa, fb)

@@ -199,6 +199,22 @@ if HAVE_NUMBA:
         return e + 0.5 * f
 
     @njit(cache=True, fastmath=FASTMATH)
+    def _nb_venergy_grad_trial(V, d, step, out, F, z, V0, wfid, grad):  # pragma: no cover
+        # meshrepair._fused.venergy_grad_trial: out = V + step d (as _nb_venergy_trial), then
+        # _nb_venergy_grad(out, ...) into grad: the same values as the two calls
+        f = 0.0
+        for v in range(V.shape[0]):
+            out[v, 0] = V[v, 0] + step * d[v, 0]
+            out[v, 1] = V[v, 1] + step * d[v, 1]
+            out[v, 2] = V[v, 2] + step * d[v, 2]
+            f += _fidelity_grad(out, V0, wfid, v, grad)
+        e = 0.0
+        for m in range(F.shape[0]):
+            i, j, k = F[m, 0], F[m, 1], F[m, 2]
+            e += _face_grad(out, i, j, k, z[m, 0], z[m, 1], z[m, 2], grad)[0]
+        return e + 0.5 * f
+
+    @njit(cache=True, fastmath=FASTMATH)
     def _nb_face_normals(V, F):  # pragma: no cover - compiled
         out = np.zeros((F.shape[0], 3))
         for m in range(F.shape[0]):
@@ -365,3 +381,35 @@ def vertex_normals(V, F):
     if HAVE_NUMBA:
         return _nb_vertex_normals(V, F)
     return _np_vertex_normals(V, F)
+
+
+def _np_signed_volume(V, F, center):
+    X = V - center
+    a, b, c = X[F[:, 0]], X[F[:, 1]], X[F[:, 2]]
+    return float(np.einsum("ij,ij->i", a, np.cross(b, c)).sum() / 6.0)
+
+
+if HAVE_NUMBA:
+
+    @njit(cache=True)
+    def _nb_signed_volume(V, F, center):  # pragma: no cover - compiled
+        c0, c1, c2 = center[0], center[1], center[2]
+        s = 0.0
+        for m in range(F.shape[0]):
+            i, j, k = F[m, 0], F[m, 1], F[m, 2]
+            ax, ay, az = V[i, 0] - c0, V[i, 1] - c1, V[i, 2] - c2
+            bx, by, bz = V[j, 0] - c0, V[j, 1] - c1, V[j, 2] - c2
+            cx, cy, cz = V[k, 0] - c0, V[k, 1] - c1, V[k, 2] - c2
+            s += ax * (by * cz - bz * cy) + ay * (bz * cx - bx * cz) + az * (bx * cy - by * cx)
+        return s / 6.0
+
+
+def signed_volume(V, F, center):
+    """Signed volume ``Σ_m a·(b×c) / 6`` of the faces with corners taken relative to
+    ``center`` (3,) (the enclosed volume of a closed, consistently oriented mesh)."""
+    V = np.ascontiguousarray(V, dtype=np.float64)
+    F = np.ascontiguousarray(F, dtype=np.int64)
+    center = np.ascontiguousarray(center, dtype=np.float64)
+    if HAVE_NUMBA:
+        return float(_nb_signed_volume(V, F, center))
+    return _np_signed_volume(V, F, center)
