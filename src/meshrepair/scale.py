@@ -88,7 +88,7 @@ def _residual_levels(V, n, W, ks, ok) -> np.ndarray:
             Vk = W @ Vk
             k += 1
         h = np.einsum("ij,ij->i", V - Vk, n)[ok]
-        out.append(1.4826 * np.median(np.abs(h - np.median(h))))
+        out.append(_mad_std(h, overwrite=True))
     return np.asarray(out)
 
 
@@ -109,14 +109,17 @@ def _model_profiles(W, ks, ok, n_samples: int = 20_000, seed: int = 0):
         while m < mm:
             Zm = W @ Zm
             m += 1
-        S[i] = np.sqrt(np.mean(Zm[ok] ** 2))
+        Zm_ok = Zm[ok]
+        S[i] = np.sqrt(np.mean(Zm_ok ** 2))
+        buf = np.empty_like(Zm_ok)
         Zk = Zm
         k = 0
         for j, kk in enumerate(ks):
             while k < kk:
                 Zk = W @ Zk
                 k += 1
-            C[i, j] = _mad_std((Zm - Zk)[ok])
+            np.subtract(Zm_ok, Zk[ok], out=buf)
+            C[i, j] = _mad_std(buf, overwrite=True)
     return C, S
 
 
@@ -126,9 +129,29 @@ def _pow(W, X, k):
     return X
 
 
-def _mad_std(X: np.ndarray) -> float:
-    x = X.ravel()
-    return float(1.4826 * np.median(np.abs(x - np.median(x))))
+def _median_inplace(x: np.ndarray) -> float:
+    """``np.median`` of the 1-D array ``x`` (same value), partitioning ``x`` in place."""
+    n = x.size
+    h = n // 2
+    if n % 2:
+        x.partition(h)
+        return float(x[h])
+    x.partition((h - 1, h))
+    return float((x[h - 1] + x[h]) / 2.0)
+
+
+def _mad_std(X: np.ndarray, overwrite: bool = False) -> float:
+    """``1.4826 median|x - median(x)|`` over the entries of ``X`` (the value of numpy's two
+    medians), on one scratch copy, or in ``X`` itself with ``overwrite`` (a contiguous float64
+    array): the 27 model medians were half of :func:`noise_scale` with numpy's copies."""
+    if overwrite and X.dtype == np.float64 and X.flags.c_contiguous:
+        x = X.reshape(-1)
+    else:
+        x = np.array(X, dtype=np.float64).ravel()
+    m = _median_inplace(x)
+    np.subtract(x, m, out=x)
+    np.abs(x, out=x)
+    return float(1.4826 * _median_inplace(x))
 
 
 def noise_scale(V: np.ndarray, F: np.ndarray, *, reference: np.ndarray | None = None,
