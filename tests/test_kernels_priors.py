@@ -43,6 +43,14 @@ def test_t_update_mixed_kernel_agrees_with_numpy(rng):
         t2 = KP._np_t_update_mixed(DN, rho1, sharp, flat, a, af, b1, w)
         assert np.allclose(t1, t2, rtol=1e-13, atol=1e-15)
         assert not t1[:5].any()
+        # the composition it replaced (compiled t_update, then prox_mc on the flat edges): equal
+        # bit for bit, so the solver's iterates do not change
+        from meshrepair.penalties import prox_mc, t_update
+
+        t3 = t_update(DN, rho1, sharp, a=a, beta1=b1, willmore_weight=w)
+        f = flat & ~sharp
+        t3[f] = prox_mc((b1 * DN[f] + rho1[f]) / b1, af, b1)
+        assert np.array_equal(t1, t3)
         smooth = ~sharp & ~flat
         assert np.allclose(t1[smooth], (b1 * DN + rho1)[smooth] / (b1 + 2 * w), rtol=1e-14)
 
@@ -92,7 +100,8 @@ def test_tangential_anchor_kernel_agrees_with_numpy(mesh, rng):
     w[10:20] = 1.0
     out1 = KF._nb_tangential_anchor(V, V0, F, w)
     out2 = KF._np_tangential_anchor(V, V0, F, w)
-    assert np.allclose(out1, out2, rtol=1e-13, atol=1e-15)
+    # bit for bit (the same sums in the same order): the solver's iterates do not change
+    assert np.array_equal(out1, out2)
     assert np.array_equal(out1[:10], V[:10])  # weight 0: unchanged
 
 

@@ -3,7 +3,10 @@ area-weighted vertex normals of ``V`` and the removal of the weighted tangential
 ``V - V⁰`` in one face pass and one vertex pass, with no numpy temporaries (it runs after every
 V-step of the feature stage on CAD regions; as numpy expressions it measured 190 µs per call on
 a 4,610-vertex mesh, 5 % of a default denoise there). Same arithmetic as
-``_kernels.vertex_normals`` followed by the numpy expression of the twin: results equal."""
+``_kernels.vertex_normals`` followed by the numpy expression of the twin, in the same order
+(the dot product summed as numpy's ``einsum`` sums it): results equal bit for bit, so the
+iterates of the solver do not change (a rounding-level change moved the MSAE of the chaotic
+fandisk γ0.7 row by +4.6 %)."""
 
 from __future__ import annotations
 
@@ -46,7 +49,7 @@ if HAVE_NUMBA:
             d0 = V[v, 0] - V0[v, 0]
             d1 = V[v, 1] - V0[v, 1]
             d2 = V[v, 2] - V0[v, 2]
-            dn = d0 * n0 + d1 * n1 + d2 * n2
+            dn = (d0 * n0 + d2 * n2) + d1 * n1  # numpy's einsum order: equal bit for bit
             w = weight[v]
             out[v, 0] = V[v, 0] - w * (d0 - dn * n0)
             out[v, 1] = V[v, 1] - w * (d1 - dn * n1)

@@ -6,8 +6,9 @@ recomputed and corrected) they measured 280 µs per feature iteration on a 4,610
 
 Same arithmetic as ``_kernels._nb_t_update`` (sharp and smooth edges) and
 :func:`meshrepair.penalties.prox_mc` (flat edges), and as ``_kernels._nb_lengths_reg_energy``
-with the MC value of ``a_flat`` on the flat, non-sharp edges: the numpy twins give the same
-results to rounding (``tests/test_kernels.py``)."""
+with the MC value of ``a_flat`` on the flat, non-sharp edges: the t-update equals the composition
+it replaces bit for bit (its sums in the same order), so the solver's iterates do not change; the
+history energy equals its twin to rounding (``tests/test_kernels_priors.py``)."""
 
 from __future__ import annotations
 
@@ -47,9 +48,9 @@ if HAVE_NUMBA:
     from .admm import _edge_reg
 
     @njit(cache=True, inline="always")
-    def _firm(r0, r1, r2, v, zeta):  # pragma: no cover - compiled
-        """Firm thresholding of ``r`` (the prox of (23)): ``min(max(v - ζ/|r|, 0), 1) r``."""
-        nr = np.sqrt(r0 * r0 + r1 * r1 + r2 * r2)
+    def _firm(r0, r1, r2, v, zeta, nr):  # pragma: no cover - compiled
+        """Firm thresholding of ``r`` (the prox of (23)) with ``nr = |r|``:
+        ``min(max(v - ζ/|r|, 0), 1) r``."""
         s = 0.0
         if nr > 0:
             s = v - zeta / nr
@@ -69,10 +70,14 @@ if HAVE_NUMBA:
             r0 = beta1 * DN[e, 0] + rho1[e, 0]
             r1 = beta1 * DN[e, 1] + rho1[e, 1]
             r2 = beta1 * DN[e, 2] + rho1[e, 2]
-            if sharp[e]:
-                t[e, 0], t[e, 1], t[e, 2] = _firm(r0 / beta1, r1 / beta1, r2 / beta1, v, zeta)
-            elif flat[e]:
-                t[e, 0], t[e, 1], t[e, 2] = _firm(r0 / beta1, r1 / beta1, r2 / beta1, vf, zf)
+            if sharp[e] or flat[e]:
+                q0, q1, q2 = r0 / beta1, r1 / beta1, r2 / beta1
+                if sharp[e]:  # the order of sums of _nb_t_update
+                    nr = np.sqrt(q0 * q0 + q1 * q1 + q2 * q2)
+                    t[e, 0], t[e, 1], t[e, 2] = _firm(q0, q1, q2, v, zeta, nr)
+                else:  # that of prox_mc (numpy's einsum): the iterates do not change
+                    nr = np.sqrt((q0 * q0 + q2 * q2) + q1 * q1)
+                    t[e, 0], t[e, 1], t[e, 2] = _firm(q0, q1, q2, vf, zf, nr)
             else:
                 t[e, 0] = r0 * smooth_div
                 t[e, 1] = r1 * smooth_div
