@@ -31,6 +31,7 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.sparse as sp
 
+from ._select import median_inplace
 from .geometry import vertex_normals
 from .topology import Topology, edge_topology
 
@@ -129,29 +130,19 @@ def _pow(W, X, k):
     return X
 
 
-def _median_inplace(x: np.ndarray) -> float:
-    """``np.median`` of the 1-D array ``x`` (same value), partitioning ``x`` in place."""
-    n = x.size
-    h = n // 2
-    if n % 2:
-        x.partition(h)
-        return float(x[h])
-    x.partition((h - 1, h))
-    return float((x[h - 1] + x[h]) / 2.0)
-
-
 def _mad_std(X: np.ndarray, overwrite: bool = False) -> float:
     """``1.4826 median|x - median(x)|`` over the entries of ``X`` (the value of numpy's two
     medians), on one scratch copy, or in ``X`` itself with ``overwrite`` (a contiguous float64
-    array): the 27 model medians were half of :func:`noise_scale` with numpy's copies."""
+    array): the 27 model medians were most of :func:`noise_scale` with numpy's medians
+    (copies, and the slow two-index partition :mod:`meshrepair._select` avoids)."""
     if overwrite and X.dtype == np.float64 and X.flags.c_contiguous:
         x = X.reshape(-1)
     else:
         x = np.array(X, dtype=np.float64).ravel()
-    m = _median_inplace(x)
+    m = median_inplace(x)
     np.subtract(x, m, out=x)
     np.abs(x, out=x)
-    return float(1.4826 * _median_inplace(x))
+    return float(1.4826 * median_inplace(x))
 
 
 def noise_scale(V: np.ndarray, F: np.ndarray, *, reference: np.ndarray | None = None,
