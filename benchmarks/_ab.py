@@ -8,7 +8,14 @@ on a cached benchmark mesh (``$TMPDIR/meshrepair-bench-cache/*.npz``, made by th
     done
 
 Arguments: ``NPZ K [ITERS]`` (``ITERS`` > 0 caps the schedule at ITERS/2 robust + ITERS/2
-feature iterations; 0 or absent: the full default schedule).
+feature iterations; 0 or absent: the full default schedule). With ``K > 1`` it prints the CPU
+time of the warm calls (min and median of calls 2..K), so alternating old and new processes
+also gives the warm-call ratio without the fixed costs::
+
+    for i in 1 2 3 4 5; do
+      PYTHONPATH=/tmp/base  python benchmarks/_ab.py M.npz 6
+      PYTHONPATH=/tmp/after python benchmarks/_ab.py M.npz 6
+    done
 """
 
 import os
@@ -30,6 +37,14 @@ if __name__ == "__main__":
     from meshrepair import denoise
 
     kw = {} if its == 0 else {"robust_iters": its // 2, "feature_iters": its - its // 2}
+    import time
+
+    cpu = []
     with threadpool_limits(1):
         for _ in range(k):
+            t = time.process_time()
             denoise(Vn, F, **kw)
+            cpu.append(time.process_time() - t)
+    if k > 1:  # the warm calls (all but the first), for paired in-process comparisons
+        w = sorted(cpu[1:])
+        print(f"warm call CPU s: min {w[0]:.4f} median {w[len(w) // 2]:.4f}")

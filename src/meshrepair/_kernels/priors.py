@@ -1,8 +1,8 @@
 """Kernels of the flat-TV edge class (:mod:`meshrepair.priors`): the t-update (22) with three
 edge classes and the edge lengths with the regulariser of (6) for the history energy, each in one
 edge pass. As numpy expressions over the flat subset (fancy indexing, ``prox_mc``, the energy
-recomputed and corrected) they measured 280 µs per feature iteration on a 4,610-vertex mesh,
-5 % of a default denoise there.
+recomputed and corrected) they were 6 % of a default denoise on a 4,610-vertex mesh; the
+t-update measured 152 → 44 µs of CPU per call there (docs/performance.md).
 
 Same arithmetic as ``_kernels._nb_t_update`` (sharp and smooth edges) and
 :func:`meshrepair.penalties.prox_mc` (flat edges), and as ``_kernels._nb_lengths_reg_energy``
