@@ -104,23 +104,28 @@ def _model_profiles(W, ks, ok, n_samples: int = 20_000, seed: int = 0):
     Z = rng.normal(size=(W.shape[0], n_probe))
     C = np.zeros((len(CANDIDATE_STEPS), len(ks)))
     S = np.zeros(len(CANDIDATE_STEPS))
-    Zm = Z
-    m = 0
-    for i, mm in enumerate(CANDIDATE_STEPS):
-        while m < mm:
-            Zm = W @ Zm
-            m += 1
-        Zm_ok = Zm[ok]
-        S[i] = np.sqrt(np.mean(Zm_ok ** 2))
-        buf = np.empty_like(Zm_ok)
-        Zk = Zm
-        k = 0
-        for j, kk in enumerate(ks):
-            while k < kk:
-                Zk = W @ Zk
-                k += 1
-            np.subtract(Zm_ok, Zk[ok], out=buf)
-            C[i, j] = _mad_std(buf, overwrite=True)
+    # W^k (W^m Z) is the (m + k)-th term of the one chain Z, W Z, W² Z, ... (the same products
+    # in the same order), so the chain is walked once: 20 sparse products instead of 52, and
+    # only the candidates still within max(ks) steps are kept
+    col = {kk: j for j, kk in enumerate(ks)}
+    first = {mm: i for i, mm in enumerate(CANDIDATE_STEPS)}
+    live: dict[int, tuple[int, np.ndarray]] = {}
+    P = Z
+    for n in range(max(CANDIDATE_STEPS) + max(ks) + 1):
+        if n:
+            P = W @ P
+        P_ok = P[ok]
+        for m, (i, Zm_ok) in list(live.items()):
+            j = col.get(n - m)
+            if j is not None:
+                buf = np.subtract(Zm_ok, P_ok)
+                C[i, j] = _mad_std(buf, overwrite=True)
+            if n - m >= max(ks):
+                del live[m]
+        if n in first:
+            i = first[n]
+            S[i] = np.sqrt(np.mean(P_ok ** 2))
+            live[n] = (i, P_ok)
     return C, S
 
 
