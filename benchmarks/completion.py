@@ -30,13 +30,20 @@ from meshrepair.errors import MeshRepairError  # noqa: E402
 from meshrepair.geometry import mean_edge_length  # noqa: E402
 from meshrepair.metrics import point_to_surface  # noqa: E402
 from meshrepair.symmetry import detect_symmetry  # noqa: E402
-from tests.test_complete_context import (  # noqa: E402
+from meshrepair.synthetic import (  # noqa: E402
     DAMAGES,
-    damage,
-    geodesic,
+    damage_region,
+    geodesic_disc,
     random_rigid,
     symmetrize,
 )
+
+
+def geodesic(V, F, center, radius):
+    return geodesic_disc(V, F, center, radius, return_distances=True)
+
+
+damage = damage_region
 
 
 def read(name):

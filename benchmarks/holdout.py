@@ -91,7 +91,9 @@ def run(only: str | None = None) -> list[dict]:
         rows.append(dict(name=c[1], set="design" if c[1] in DESIGN else "held out",
                          msae_in=msae(Vn, Vt, F), msae=msae(r.V, Vt, F),
                          ea=mean_angle(r.V, Vt, F), ev=vertex_error(r.V, Vt), time=dt,
-                         iters=r.iterations))
+                         iters=r.iterations,
+                         params={k: v for k, v in r.params.items()
+                                 if isinstance(v, (bool, int, float, str))}))
         print(json.dumps(rows[-1], ensure_ascii=False), flush=True)
     return rows
 

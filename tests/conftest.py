@@ -76,19 +76,3 @@ def grid(n: int, z=None) -> tuple[np.ndarray, np.ndarray]:
     b, c, d = a + n, a + n + 1, a + 1
     return V, np.r_[np.c_[a, b, c], np.c_[a, c, d]].astype(np.int64)
 
-
-def geodesic_disc(V, F, center, radius, *, return_distances: bool = False):
-    """Faces whose three vertices are within ``radius`` (edge-graph geodesic) of vertex
-    ``center``; with ``return_distances`` also the per-vertex distances (inf beyond 1.5 r)."""
-    import scipy.sparse as sp
-    from scipy.sparse.csgraph import dijkstra
-
-    from meshrepair.topology import edge_topology
-
-    e = edge_topology(F, len(V)).edges
-    w = np.linalg.norm(V[e[:, 0]] - V[e[:, 1]], axis=1)
-    G = sp.coo_matrix((np.r_[w, w], (np.r_[e[:, 0], e[:, 1]], np.r_[e[:, 1], e[:, 0]])),
-                      shape=(len(V), len(V))).tocsr()
-    d = dijkstra(G, indices=center, limit=1.5 * radius)
-    faces = np.flatnonzero((d[F] <= radius).all(axis=1))
-    return (faces, d) if return_distances else faces

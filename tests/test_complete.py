@@ -25,11 +25,11 @@ from meshrepair.correspondence import apply_transform, split_boundary_edges
 from meshrepair.errors import MeshRepairError
 from meshrepair.geometry import dihedral_angles, face_normals, mean_edge_length
 from meshrepair.metrics import distances, point_to_surface
+from meshrepair.synthetic import geodesic_disc
 from meshrepair.topology import boundary_loops, edge_topology
 from meshrepair.validate import check_mesh
 
 from .bundled import bundled_mesh
-from .conftest import geodesic_disc
 
 # ----------------------------------------------------------------------------------------------
 # helpers

@@ -24,72 +24,28 @@ import trimesh
 from meshrepair.complete import complete, extract_patch
 from meshrepair.correspondence import apply_transform
 from meshrepair.errors import MeshRepairError
-from meshrepair.geometry import mean_edge_length, vertex_normals
+from meshrepair.geometry import mean_edge_length
 from meshrepair.io import read_mesh
 from meshrepair.metrics import point_to_surface
 from meshrepair.rigid import reflection
 from meshrepair.symmetry import detect_symmetry
-from meshrepair.topology import boundary_loops
+from meshrepair.synthetic import DAMAGES, damage_region, geodesic_disc, random_rigid, symmetrize
 from meshrepair.validate import check_mesh
 
-from .conftest import geodesic_disc, shared_mesh
+from .conftest import shared_mesh
 
 DATA = Path(__file__).resolve().parents[1] / "src" / "meshrepair" / "data"
-DAMAGES = ("dent", "spike", "noise", "flat")
 
 
 def geodesic(V, F, center, radius):
     return geodesic_disc(V, F, center, radius, return_distances=True)
 
 
-def random_rigid(seed, shift):
-    from scipy.spatial.transform import Rotation
-
-    T = np.eye(4)
-    T[:3, :3] = Rotation.random(random_state=seed).as_matrix()
-    T[:3, 3] = shift * np.random.default_rng(seed).normal(size=3)
-    return T
-
-
 def damage(V, F, faces, d, radius, kind, seed=0):
     """The mesh with the region's interior vertices damaged (its boundary is left intact)."""
-    b = boundary_loops(F[faces], len(V))[0]
-    inner = np.setdiff1d(np.unique(F[faces]), b)
-    l = mean_edge_length(V, F)
-    N = vertex_normals(V, F)
-    Vd = V.copy()
-    if kind == "dent":
-        Vd[inner] -= (2 * l * np.clip(1 - d[inner] / radius, 0, 1))[:, None] * N[inner]
-    elif kind == "spike":
-        c = inner[np.argmin(d[inner])]
-        Vd[c] += 5 * l * N[c]
-    elif kind == "noise":
-        Vd[inner] += 0.5 * l * np.random.default_rng(seed).normal(size=(len(inner), 3))
-    elif kind == "flat":
-        c = V[b].mean(axis=0)
-        n = np.linalg.svd(V[b] - c)[2][2]
-        Vd[inner] -= ((V[inner] - c) @ n)[:, None] * n
-    assert np.abs(Vd - V).max() > 0.2 * l
+    Vd = damage_region(V, F, faces, d, radius, kind, seed=seed)
+    assert np.abs(Vd - V).max() > 0.2 * mean_edge_length(V, F)
     return Vd
-
-
-def symmetrize(V, F, axis=0):
-    """Exactly mirror-symmetric mesh: the half on one side of a principal plane and its mirror."""
-    c = V.mean(axis=0)
-    n = np.zeros(3)
-    n[axis] = 1.0
-    Vh, Fh = trimesh.intersections.slice_faces_plane(V, F, n, c)[:2]
-    Vh = np.asarray(Vh, float).copy()
-    Fh = np.asarray(Fh, np.int64)
-    on = np.abs(Vh[:, axis] - c[axis]) < 1e-12
-    Vh[on, axis] = c[axis]
-    Vm = Vh.copy()
-    Vm[:, axis] = 2 * c[axis] - Vm[:, axis]
-    W = trimesh.Trimesh(np.vstack([Vh, Vm]), np.vstack([Fh, Fh[:, ::-1] + len(Vh)]),
-                        process=False)
-    W.merge_vertices(digits_vertex=10)
-    W.remove_unreferenced_vertices()
-    return np.asarray(W.vertices, float), np.asarray(W.faces, np.int64)
 
 
 def self_completion_errors(V, F, center, radius_l=6.0, kinds=DAMAGES):

@@ -22,14 +22,20 @@ recorded in ``DenoiseResult.params``):
    relative change of V drops below ``2e-4``.
 3. *Feature stage*: in C, M_E from the dihedral threshold (refreshed every 3 iterations, chains
    ≥ 6 edges) with ``a = 10``, and the flat-TV class (:mod:`meshrepair.priors`, MC ``a = 0.5``)
-   on C's flat edges; edge-Willmore elsewhere; ``β1 = 1.2 a``, ``β2 ≈ 1.67 β1``; ≤ 60
-   iterations or rule (35).
+   on C's flat edges; edge-Willmore elsewhere, with weight ``6 w`` outside C on CAD parts
+   (:func:`outside_weight`); ``β1 = 1.2 a``, ``β2 ≈ 1.67 β1``; ≤ 60 iterations or rule (35).
+4. *Tangential re-anchoring* of the smooth region (:mod:`meshrepair.reproject`): outside C the
+   result's vertices slide along the result surface towards the closest points of the input's
+   vertices, ``V_i + w_i (π_S(V⁰_i) - V_i)`` with the least-variance weights
+   ``w_i = σ²/(σ² + κ² d_i²)``, when the residual tangential ratio reads noise along the
+   normals (``ρ_t < 0.6``) and the noise is not heavy (:data:`REANCHOR`).
 
 Throughout: λ = ``clip(0.02 / γ̂², 0.05, 1)``; the Willmore weight ``w`` from ρ for correlated
-noise along the normals (:func:`willmore_weight_from_scale`); a Huber fidelity for impulsive
-noise (:mod:`meshrepair.fidelity`); a tangential anchor on C when the noise lies along the
-normals (r_t < 0.65). All parameters are in mean-edge-length units, so the result is
-equivariant under rotation, translation and uniform scaling.
+noise along the normals (:func:`willmore_weight_from_scale`) and then ``3 max(1, ℓ²)`` V-steps
+per iteration for its correlation length ℓ, the probe included (:func:`inner_iters_from_scale`);
+a Huber fidelity for impulsive noise (:mod:`meshrepair.fidelity`); a tangential anchor on C
+when the noise lies along the normals (r_t < 0.65). All parameters are in mean-edge-length
+units, so the result is equivariant under rotation, translation and uniform scaling.
 """
 
 from __future__ import annotations
@@ -274,6 +280,37 @@ def _keep_consistent_clusters(V_out, V_unf, V_ref, topo):
     return out
 
 
+REANCHOR = True
+REANCHOR_MAX_RATIO = 0.6
+"""Tangential re-anchoring of the smooth region after the solve (:mod:`meshrepair.reproject`):
+the result's vertices outside the crease-supported region slide along the result surface
+towards the input's closest points, with the minimum-variance weights of
+:func:`meshrepair.reproject.blend_weights`, when the residual tangential ratio
+:func:`meshrepair.reproject.residual_tangential_ratio` reads noise along the normals
+(``ρ_t < 0.6``) and the noise is not heavy (``γ̂ ≤ HEAVY_NOISE``). It runs before
+:func:`unfold_result`, whose probe check then judges the final positions. Measured in
+docs/parameters.md (issue 12, round 4): nllr_igea MSAE 230.7 → 222.4, E_V ratio 1.58 → 1.13;
+nllr_nicolo E_V 1.22 → 1.07; every CAD row within ±0.2 %."""
+
+
+def _reanchor_smooth(V_in, V_out, F, topo, sup_v, gamma, info):
+    """:data:`REANCHOR` on the vertices outside ``sup_v``; records its decision in ``info``."""
+    from .reproject import reanchor, residual_tangential_ratio
+
+    ratio = residual_tangential_ratio(V_out, V_in, F)
+    info["reanchor_ratio"] = ratio
+    if not (ratio < REANCHOR_MAX_RATIO) or gamma > HEAVY_NOISE:
+        return V_out
+    V_new, w = reanchor(V_out, V_in, F, ~sup_v, topo=topo)
+    info["reanchored"] = int((w > 0).sum())
+    el = float(np.linalg.norm(V_in[topo.edges[:, 0]] - V_in[topo.edges[:, 1]], axis=1).mean())
+    shift = np.sqrt(np.mean(np.sum((V_new - V_out) ** 2, axis=1)))
+    info["reanchor_shift"] = float(shift / el) if el > 0 else 0.0  # mean edge lengths
+    log.info("re-anchored %d smooth-region vertices tangentially (residual ratio %.2f)",
+             info["reanchored"], ratio)
+    return V_new
+
+
 PROBE_MAX_ITERS = 120
 PROBE_EARLY_STOP = True
 """Cap of the robust probe that decides the crease-supported region."""
@@ -325,12 +362,66 @@ def willmore_weight_from_scale(rho: float, impulsive: bool = False,
     return float(np.clip(1.0 + 150.0 * (rho - 1.12), 1.0, 16.0))
 
 
+CAD_SUPPORT = 0.2
+CAD_WILLMORE = 6.0
+"""Rule of :func:`outside_weight`: a mesh whose crease-supported region covers at least
+``CAD_SUPPORT`` of its edges is a CAD part, and edge-Willmore outside that region gets the
+weight ``CAD_WILLMORE`` (times ``w``) in the feature stage."""
+
+
+def outside_weight(support_fraction: float, tangential: float) -> float:
+    """Factor on edge-Willmore *outside* the crease-supported region C, feature stage only:
+
+    .. math:: w_{out} = \\begin{cases} 6 & |C| / n_E \\ge 0.2 \\text{ and } r_t < 0.65 \\\\
+                                       1 & \\text{otherwise.} \\end{cases}
+
+    Outside C a CAD part is smooth patches (planes, cylinders, blends) far from its creases.
+    The quadratic prior ``w ||t_e||²`` against the coupling ``β2 ||N - 𝒩(V)||²`` averages the
+    normals over about ``√(w/β2)`` rings; with ``w = 1`` it leaves a ripple of a few degrees
+    there (tgv_fandisk: median face error 1.67° outside C against MeshTGV's 0.88°; inside C
+    ours is already lower). ``w_out = 6`` averages over ≈ 1.5 rings more and measured 0.96°.
+    It is quadratic, so it does not terrace the curved patches the flat-TV class would.
+
+    The supported fraction separates the cases: CAD parts 0.41-0.64 (fandisk, twelve,
+    sharp_sphere, trim_star, screwdriver), the organic meshes 0.04-0.10 (nicolo, igea,
+    pierrot, bunny, rocker_arm: short left-over chains), so organic results do not change.
+    Heavy noise on coarse organic meshes can read high (spot γ0.4 0.63, camelhead 0.96); there
+    C covers nearly everything and the factor acts on little. Noise not along the normals
+    (``r_t ≥ 0.65``, :data:`TANGENTIAL_MAX`) keeps 1: fandisk γ0.4 random lost 9 % with it.
+    Measured in docs/parameters.md (round 4).
+    """
+    if support_fraction >= CAD_SUPPORT and tangential < TANGENTIAL_MAX:
+        return CAD_WILLMORE
+    return 1.0
+
+
+def inner_iters_from_scale(length: float, base: int = 3) -> int:
+    r"""V-steps per ADMM iteration for noise correlated over ``ℓ`` mean edge lengths
+    (:func:`meshrepair.scale.noise_scale`), used when the noise is found correlated (``w > 1``):
+
+    .. math:: n_{inner} = \mathrm{clip}(\mathrm{round}(3\, \max(1, ℓ^2)),\, 3,\, 12).
+
+    The V-update (26) is solved by a few preconditioned gradient steps, each moving a vertex
+    from its 1-ring: a bump of the vertices ``ℓ`` rings wide needs about ``ℓ²`` times as many
+    local steps to follow the smoothed normals as a one-ring bump (diffusion). On the real
+    Kinect scan (``ℓ ≈ 1.4-1.7``) the ADMM normals and the mesh's own normals keep the same
+    error (184 / 184 deg²), so the vertices, not the prior, hold the low-frequency bumps in;
+    3 / 6 / 10 / 20 steps (probe and solve): MSAE 184 / 167 / 169 / 170. The probe is run
+    again with the new count (the correlation is known only after a first probe): its better
+    converged normals keep a few crease chains (support 0 → 2.6 % of the edges); with 6 steps
+    in the final solve only, 176. On i.i.d. heavy noise more steps hurt (gcn_fandisk_n6 64 →
+    78 with 6), hence only for correlated noise (``w > 1``).
+    """
+    return int(np.clip(round(base * max(1.0, float(length) ** 2)), base, 12))
+
+
 def default_stages(*, robust_iters: int = 40, feature_iters: int = 60, a: float = 10.0,
                    flat_a: float = 0.0, robust_a: float = 0.5) -> tuple[Stage, ...]:
     """The two-stage schedule described in the module docstring."""
     return (
         Stage(a=robust_a, eps=2.0, beta2_ratio=10.0, mask="all", max_iter=robust_iters,
-              switch_tol=2e-4, min_iter=min(10, robust_iters), name="robust"),
+              switch_tol=2e-4, min_iter=min(10, robust_iters), willmore_edges=False,
+              name="robust"),
         Stage(a=a, eps=1.2, beta2_ratio=20.0 / 12.0, mask="adaptive", max_iter=feature_iters,
               flat_a=flat_a, name="feature"),
     )
@@ -350,7 +441,7 @@ def denoise(
     tol: float = 1e-6,
     unfold: bool = True,
     inner_solver: str = "armijo",
-    inner_iters: int = 3,
+    inner_iters: int | None = None,
     n_solver: str = "auto",
     stages: tuple[Stage, ...] | None = None,
     huber_delta: float | None = None,
@@ -377,7 +468,8 @@ def denoise(
     unfold : unfold folded-over faces before the solve, and those still folded after it.
     inner_solver : V-subproblem solver (``"armijo"``, ``"gd"``, ``"heavy_ball"``, ``"lbfgs"``,
         ``"bfgs"``).
-    inner_iters : inner iterations per ADMM iteration.
+    inner_iters : inner iterations per ADMM iteration; default 3, more for correlated noise
+        (:func:`inner_iters_from_scale`).
     n_solver : N-subproblem solver (``"auto"``, ``"cg"``, ``"direct"``).
     stages : a custom schedule replacing the default two stages (then no region probe).
     huber_delta : threshold δ of the robust Huber fidelity (:mod:`meshrepair.fidelity`), mean
@@ -387,8 +479,8 @@ def denoise(
         the noise (:func:`willmore_weight_from_scale`).
     regions : decide per region whether a crease is supported (:mod:`meshrepair.regions`) from a
         first robust probe, and use the smooth prior only elsewhere; ``False`` runs the MC stages
-        on the whole mesh without probe, flat-TV class, anchor or correlated-noise weight (the
-        heavy-noise and impulsive rules still apply).
+        on the whole mesh without probe, flat-TV class, anchor, correlated-noise weight or
+        tangential re-anchoring (the heavy-noise and impulsive rules still apply).
     callback : called with each iteration's history entry; raise
         :class:`meshrepair.solver.StopRequested` to stop early.
 
@@ -453,7 +545,8 @@ def _denoise(V, F, *, lam, th, a, robust_iters, feature_iters, mask_update_every
     feature_iters = check_int("feature_iters", feature_iters, low=0)
     mask_update_every = check_int("mask_update_every", mask_update_every, low=0)
     min_feature_edges = check_int("min_feature_edges", min_feature_edges, low=1)
-    inner_iters = check_int("inner_iters", inner_iters, low=1)
+    auto_inner = inner_iters is None
+    inner_iters = check_int("inner_iters", 3 if auto_inner else inner_iters, low=1)
     tol = check_number("tol", tol, low=0, low_open=True)
     unfold = check_bool("unfold", unfold)
     regions = check_bool("regions", regions)
@@ -510,33 +603,52 @@ def _denoise(V, F, *, lam, th, a, robust_iters, feature_iters, mask_update_every
     Vd = fidelity_data(Vd, Vw, impulsive)
     Vi = None if Vd is Vw else Vw
     info = {"tangential_ratio": float("nan"), "support_fraction": float("nan"),
+            "outside_weight": 1.0,
             "willmore_weight": 1.0, "noise_rho": float("nan"), "noise_length": float("nan"),
             "noise_gamma_scale": float("nan")}
-    force = flat = anchor = None
+    force = flat = anchor = wedges = None
     r1_V = None
+    sup_v = None  # vertices of the crease-supported region, input order
     ww = 1.0 if willmore_weight is None else float(willmore_weight)
     if probe and stages[0].max_iter > 0:
         n1 = int(min(stages[0].max_iter, PROBE_MAX_ITERS))
         st1 = replace(stages[0], max_iter=n1, min_iter=min(stages[0].min_iter, n1))
         # the probe is a one-stage run: its stage's switch rule becomes the stopping rule
         kw1 = {**opts_kw, "tol": st1.switch_tol if PROBE_EARLY_STOP else opts_kw["tol"]}
+        Vn_w = V[pv] if reorder else V
         r1 = ADMMSolver(Fw, len(V), options=SolverOptions(stages=(st1,), **kw1),
                         topo=topo_w).solve(Vd, Vi)
+        tr = tangential_ratio(Vn_w, Fw, r1.V, topo=topo_w)
+        ns = noise_scale(Vn_w, Fw, reference=r1.V, topo=topo_w)
+        if willmore_weight is None:
+            ww = willmore_weight_from_scale(ns.rho, impulsive, tr)
+        if auto_inner and ww > 1.0:  # correlated noise: more V-steps for its long waves,
+            inner_iters = inner_iters_from_scale(ns.length)  # in the probe too (its creases)
+            opts_kw["inner_iters"] = inner_iters
+            if inner_iters != kw1["inner_iters"]:
+                kw1["inner_iters"] = inner_iters
+                r1 = ADMMSolver(Fw, len(V), options=SolverOptions(stages=(st1,), **kw1),
+                                topo=topo_w).solve(Vd, Vi)
+                tr = tangential_ratio(Vn_w, Fw, r1.V, topo=topo_w)
         r1_V = r1.V[inv] if reorder else r1.V
         sup = crease_support(topo_w, r1.N, th=th)
         force = np.where(sup, -1, 0).astype(np.int8)
+        sup_v = np.zeros(len(V), bool)
+        sup_v[topo_w.edges[sup].ravel()] = True
+        if reorder:
+            sup_v = sup_v[inv]
         flat = flat_edges(topo_w, r1.N, sup, max_spread=FLAT_SPREAD_DEFAULT)
-        tr = tangential_ratio(V[pv] if reorder else V, Fw, r1.V, topo=topo_w)
         if tr < TANGENTIAL_MAX and sup.any():  # noise along the normals: anchor the CAD region
             anchor = np.zeros(len(V))
             anchor[topo_w.edges[sup].ravel()] = 1.0
         info["tangential_ratio"] = tr
-        ns = noise_scale(V[pv] if reorder else V, Fw, reference=r1.V, topo=topo_w)
-        if willmore_weight is None:
-            ww = willmore_weight_from_scale(ns.rho, impulsive, tr)
         if lam is None and ww > 1.0:  # correlated noise: λ from its level at its own scale
             lam_used = lambda_from_noise(max(gamma, ns.gamma))
             opts_kw["lam"] = lam_used
+        w_out = outside_weight(float(sup.mean()), tr) if willmore_weight is None else 1.0
+        if w_out != 1.0:  # a CAD part: its smooth patches get the stronger smooth prior
+            wedges = np.where(sup, ww, ww * w_out)
+        info["outside_weight"] = w_out
         info.update(support_fraction=float(sup.mean()), willmore_weight=ww,
                     noise_rho=ns.rho, noise_length=ns.length, noise_gamma_scale=ns.gamma)
         log.info("crease support on %.1f %% of the edges; noise correlation %.2f (length %.1f, "
@@ -547,7 +659,8 @@ def _denoise(V, F, *, lam, th, a, robust_iters, feature_iters, mask_update_every
         """The main run; on a reordered copy the result is mapped back exactly."""
         opts = SolverOptions(stages=tuple(stages_), willmore_weight=ww, **opts_kw)
         res = ADMMSolver(Fw, len(V), options=opts, topo=topo_w, edge_force=force,
-                         flat_edges=flat, anchor=anchor).solve(Vd, Vi, callback=callback)
+                         flat_edges=flat, anchor=anchor, willmore_edges=wedges
+                         ).solve(Vd, Vi, callback=callback)
         if reorder:
             return res, res.V[inv], _edge_values_to(topo, pv[res.edges], res.M_E)
         return res, res.V, res.M_E
@@ -564,7 +677,7 @@ def _denoise(V, F, *, lam, th, a, robust_iters, feature_iters, mask_update_every
                     "%.3g, %d vertices); solving again without it", shrink, len(V))
         robust_iters = 0
         # the probe's decisions came from the collapsed robust run: drop them too
-        force = flat = anchor = None
+        force = flat = anchor = wedges = sup_v = None
         ww = 1.0 if willmore_weight is None else float(willmore_weight)
         lam_used = lambda_from_noise(gamma) if lam is None else float(lam)
         opts_kw["lam"] = lam_used
@@ -578,6 +691,9 @@ def _denoise(V, F, *, lam, th, a, robust_iters, feature_iters, mask_update_every
                 f"denoise collapsed this closed mesh: its volume fell to {shrink:.3g} of the "
                 f"input's even without the robust stage ({len(V)} vertices; a mesh this coarse "
                 "has no smooth regions for the model); it cannot be denoised")
+    info.update(reanchor_ratio=float("nan"), reanchored=0, reanchor_shift=0.0)
+    if REANCHOR and sup_v is not None:  # before the unfolding: it judges the final positions
+        V_out = _reanchor_smooth(V, V_out, F, topo, sup_v, max(gamma, gamma_rms), info)
     n_res_folded = 0
     if unfold and UNFOLD_RESULT:
         V_out, n_res_folded = unfold_result(V_out, topo, r1_V)

@@ -16,6 +16,12 @@ stage:
 ``T`` the crease-supported edges. The t-subproblem (22) still separates over edges; on ``T`` it is
 the firm-thresholding prox of (23) with ``a_f`` in place of ``a`` (strongly convex since
 ``β1 > a ≥ a_f``, rule (24)). Outside ``T`` (smooth, organic regions) nothing changes.
+
+**Per-edge Willmore weight.** The Willmore class may carry one weight per edge, ``w_e`` in place
+of ``w`` (``willmore_weight`` given as an array); the t-step stays the exact minimiser of (22),
+edge by edge ``t_e = (β1 (DN)_e + ρ_{1e}) / (β1 + 2 w_e)`` (convex for every ``w_e ≥ 0``, so
+rule (24) is unchanged). :func:`meshrepair.denoise.outside_weight` uses it to give the smooth
+patches of CAD parts, outside the crease-supported region, a stronger smooth prior.
 """
 
 from __future__ import annotations
@@ -38,7 +44,8 @@ def t_update_mixed(DN: np.ndarray, rho1: np.ndarray, sharp: np.ndarray, flat: np
     flat : (nE,) bool, the flat-TV class ``T`` (MC with ``a_flat`` where not sharp)
     a, a_flat : non-convexities, ``beta1 > max(a, a_flat)``
     beta1 : penalty parameter
-    willmore_weight : ``w`` on the remaining edges
+    willmore_weight : ``w`` on the remaining edges, a float or ``(nE,)`` per-edge weights
+        (:data:`meshrepair.priors` module docstring, "per-edge Willmore weight")
 
     Returns
     -------
@@ -52,7 +59,8 @@ def reg_energy_mixed(t: np.ndarray, sharp: np.ndarray, flat: np.ndarray, *, a: f
                      a_flat: float, willmore_weight: float = 1.0) -> float:
     """``R(t)`` of the module docstring for per-edge vectors ``t (nE, 3)``."""
     nt = np.sqrt(np.einsum("ij,ij->i", t, t))
-    f = np.asarray(flat, bool) & ~np.asarray(sharp, bool)
-    val = np.where(sharp, mc_penalty(nt, a), willmore_weight * nt * nt)
-    val[f] = mc_penalty(nt[f], a_flat)
+    val = np.where(sharp, mc_penalty(nt, a), np.asarray(willmore_weight) * nt * nt)
+    if flat is not None:
+        f = np.asarray(flat, bool) & ~np.asarray(sharp, bool)
+        val[f] = mc_penalty(nt[f], a_flat)
     return float(val.sum())

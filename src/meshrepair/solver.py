@@ -60,6 +60,8 @@ class Stage:
     relax : tangential relaxation weight per iteration (0 disables).
     flat_a : MC non-convexity on the non-sharp edges of the solver's ``flat_edges`` (the
         flat-TV class of :mod:`meshrepair.priors`; 0: edge-Willmore there as in the paper).
+    willmore_edges : use the solver's per-edge Willmore weights (``willmore_edges`` of
+        :class:`ADMMSolver`) in this stage; False: ``SolverOptions.willmore_weight`` everywhere.
     name : label shown in the history.
     """
 
@@ -72,6 +74,7 @@ class Stage:
     min_iter: int = 1
     relax: float = 0.0
     flat_a: float = 0.0
+    willmore_edges: bool = True
     name: str = "stage"
 
     @property
@@ -224,6 +227,8 @@ class ADMMSolver:
     flat_edges : (nE,) bool, optional, the edges of the flat-TV class (stages with ``flat_a``).
     anchor : (nV,) float in [0, 1], optional, weight of the tangential anchor
         (:func:`meshrepair.fidelity.tangential_anchor`) applied after every V-step.
+    willmore_edges : (nE,) float > 0, optional, per-edge weight of edge-Willmore replacing
+        ``options.willmore_weight`` (:mod:`meshrepair.priors`).
     options : SolverOptions
     topo : Topology, optional (precomputed)
     """
@@ -231,7 +236,8 @@ class ADMMSolver:
     def __init__(self, F: np.ndarray, n_vertices: int, *, M_V: np.ndarray | None = None,
                  edge_force: np.ndarray | None = None, fixed: np.ndarray | None = None,
                  options: SolverOptions | None = None, topo: Topology | None = None,
-                 flat_edges: np.ndarray | None = None, anchor: np.ndarray | None = None):
+                 flat_edges: np.ndarray | None = None, anchor: np.ndarray | None = None,
+                 willmore_edges: np.ndarray | None = None):
         self.options = options or SolverOptions()
         self.options.validate()
         self.F = np.asarray(F, dtype=np.int64)
@@ -254,6 +260,17 @@ class ADMMSolver:
         self.nsys = NormalSystem(self.fa, self.fb, self.topo.n_faces)
         self._flat_int = (None if self.flat_edges is None or not self.flat_edges.any()
                           else self.flat_edges[self.ie])
+        self.willmore_edges = (None if willmore_edges is None
+                               else np.asarray(willmore_edges, dtype=np.float64))
+        if self.willmore_edges is not None and (
+                self.willmore_edges.shape != (self.topo.n_edges,)
+                or not np.all(np.isfinite(self.willmore_edges))
+                or np.any(self.willmore_edges < 0)):
+            from .errors import MeshRepairError
+
+            raise MeshRepairError("willmore_edges must be one finite weight >= 0 per edge")
+        self._w_int = (None if self.willmore_edges is None
+                       else np.ascontiguousarray(self.willmore_edges[self.ie]))
 
     @property
     def relaxer(self) -> TangentialRelaxer:
@@ -366,11 +383,13 @@ class ADMMSolver:
                     # (17) t-update
                     DN = _k.grad_edges(N, l, fa, fb)
                     mixed = stage.flat_a > 0 and self._flat_int is not None
-                    if mixed:
-                        fl = self._flat_int
+                    w_int = self._w_int if stage.willmore_edges else None
+                    if mixed or w_int is not None:
+                        fl = self._flat_int if mixed else None
                         t = t_update_mixed(DN, rho1, sh, fl, a=stage.a, a_flat=stage.flat_a,
                                            beta1=max(beta1, 1.01 * stage.flat_a),
-                                           willmore_weight=o.willmore_weight)
+                                           willmore_weight=(o.willmore_weight if w_int is None
+                                                            else w_int))
                     else:
                         t = t_update(DN, rho1, sh, a=stage.a, beta1=beta1,
                                      willmore_weight=o.willmore_weight)
@@ -406,6 +425,11 @@ class ADMMSolver:
                     else:
                         l, reg = _fused.lengths_reg_energy(V, E_int, Nv, fa, fb, sh, stage.a,
                                                            o.willmore_weight)
+                    if w_int is not None:  # per-edge Willmore weights on the smooth edges
+                        f = np.flatnonzero(~sh & ~fl) if mixed else np.flatnonzero(~sh)
+                        tf = l[f, None] * (Nv[fa[f]] - Nv[fb[f]])
+                        reg += float(((w_int[f] - o.willmore_weight)
+                                      * np.einsum("ij,ij->i", tf, tf)).sum())
                     entry = {
                         "iter": k,
                         "stage": stage.name,
@@ -447,4 +471,5 @@ class ADMMSolver:
         """A solver on the same connectivity with some options changed (reuses the topology)."""
         return ADMMSolver(self.F, self.topo.n_vertices, M_V=self.M_V, edge_force=self.edge_force,
                           fixed=self.fixed, options=replace(self.options, **changes),
-                          topo=self.topo, flat_edges=self.flat_edges, anchor=self.anchor)
+                          topo=self.topo, flat_edges=self.flat_edges, anchor=self.anchor,
+                          willmore_edges=self.willmore_edges)

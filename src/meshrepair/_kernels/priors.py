@@ -21,13 +21,15 @@ def _np_t_update_mixed(DN, rho1, sharp, flat, a, a_flat, beta1, w):
     from ..penalties import prox_mc
 
     sharp = np.asarray(sharp, bool)
+    w = np.asarray(w, dtype=np.float64)
     base = beta1 * DN + rho1
-    t = base / (beta1 + 2.0 * w)
+    t = base / (beta1 + 2.0 * w)[:, None] if w.ndim else base / (beta1 + 2.0 * float(w))
     if sharp.any():
         t[sharp] = prox_mc(base[sharp] / beta1, a, beta1)
-    f = np.asarray(flat, bool) & ~sharp
-    if f.any():
-        t[f] = prox_mc(base[f] / beta1, a_flat, beta1)
+    if flat is not None:
+        f = np.asarray(flat, bool) & ~sharp
+        if f.any():
+            t[f] = prox_mc(base[f] / beta1, a_flat, beta1)
     return t
 
 
@@ -58,26 +60,39 @@ if HAVE_NUMBA:
         return s * r0, s * r1, s * r2
 
     @njit(cache=True)
-    def _nb_t_update_mixed(DN, rho1, sharp, flat, a, a_flat, beta1, w):  # pragma: no cover
+    def _nb_t_update_mixed(DN, rho1, sharp, flat, a, a_flat, beta1, w, per_edge
+                           ):  # pragma: no cover - compiled
+        # the code it replaces, bit for bit: with one weight w[0] the compiled t_update
+        # (reciprocal of beta1 + 2w, sums left to right on sharp edges) and prox_mc on the flat
+        # ones; with per-edge weights (per_edge) numpy's expressions (a division per edge,
+        # prox_mc on the sharp and the flat edges: its norm sums as numpy's einsum does)
         n = DN.shape[0]
         t = np.empty((n, 3))
-        smooth_div = 1.0 / (beta1 + 2.0 * w)
+        smooth_div = 1.0 / (beta1 + 2.0 * w[0])
         v = beta1 / (beta1 - a) if beta1 > a else 0.0
         zeta = np.sqrt(2.0 * a) / (beta1 - a) if beta1 > a else 0.0
-        vf = beta1 / (beta1 - a_flat)
-        zf = np.sqrt(2.0 * a_flat) / (beta1 - a_flat)
+        vf = beta1 / (beta1 - a_flat) if beta1 > a_flat else 0.0
+        zf = np.sqrt(2.0 * a_flat) / (beta1 - a_flat) if beta1 > a_flat else 0.0
         for e in range(n):
             r0 = beta1 * DN[e, 0] + rho1[e, 0]
             r1 = beta1 * DN[e, 1] + rho1[e, 1]
             r2 = beta1 * DN[e, 2] + rho1[e, 2]
             if sharp[e] or flat[e]:
                 q0, q1, q2 = r0 / beta1, r1 / beta1, r2 / beta1
-                if sharp[e]:  # the order of sums of _nb_t_update
+                if sharp[e] and not per_edge:  # the order of sums of _nb_t_update
                     nr = np.sqrt(q0 * q0 + q1 * q1 + q2 * q2)
                     t[e, 0], t[e, 1], t[e, 2] = _firm(q0, q1, q2, v, zeta, nr)
-                else:  # that of prox_mc (numpy's einsum): the iterates do not change
+                elif sharp[e]:  # that of prox_mc (numpy's einsum)
+                    nr = np.sqrt((q0 * q0 + q2 * q2) + q1 * q1)
+                    t[e, 0], t[e, 1], t[e, 2] = _firm(q0, q1, q2, v, zeta, nr)
+                else:
                     nr = np.sqrt((q0 * q0 + q2 * q2) + q1 * q1)
                     t[e, 0], t[e, 1], t[e, 2] = _firm(q0, q1, q2, vf, zf, nr)
+            elif per_edge:
+                d = beta1 + 2.0 * w[e]
+                t[e, 0] = r0 / d
+                t[e, 1] = r1 / d
+                t[e, 2] = r2 / d
             else:
                 t[e, 0] = r0 * smooth_div
                 t[e, 1] = r1 * smooth_div
@@ -109,16 +124,22 @@ if HAVE_NUMBA:
 
 def t_update_mixed(DN, rho1, sharp, flat, a, a_flat, beta1, w):
     """Minimiser of (22) with the MC class ``sharp`` (``a``), the flat-TV class ``flat & ~sharp``
-    (``a_flat``) and ``w ||t||²`` elsewhere; ``beta1 > max(a, a_flat)``. Returns ``(nE, 3)``."""
-    if not beta1 > a_flat:
+    (``a_flat``; ``flat`` may be None: no such class) and ``w ||t||²`` elsewhere, ``w`` one
+    weight or ``(nE,)`` per-edge weights; ``beta1 > max(a, a_flat)``. Returns ``(nE, 3)``."""
+    sharp = np.asarray(sharp, bool)
+    w = np.asarray(w, dtype=np.float64)
+    n = len(DN)
+    flat_b = np.zeros(n, bool) if flat is None else np.asarray(flat, bool)
+    if (flat_b & ~sharp).any() and not beta1 > a_flat:
         raise ValueError(f"the flat-TV class needs beta1 > a_flat (beta1={beta1}, "
                          f"a_flat={a_flat})")
-    if np.any(sharp) and not beta1 > a:
+    if sharp.any() and not beta1 > a:
         raise ValueError(f"beta1 must exceed a on sharp edges (rule (24)): beta1={beta1}, a={a}")
     if HAVE_NUMBA and DN.dtype == np.float64 and rho1.dtype == np.float64:
-        return _nb_t_update_mixed(np.ascontiguousarray(DN), np.ascontiguousarray(rho1),
-                                  np.asarray(sharp, bool), np.asarray(flat, bool), float(a),
-                                  float(a_flat), float(beta1), float(w))
+        per_edge = w.ndim > 0
+        wa = np.ascontiguousarray(w) if per_edge else w.reshape(1)
+        return _nb_t_update_mixed(np.ascontiguousarray(DN), np.ascontiguousarray(rho1), sharp,
+                                  flat_b, float(a), float(a_flat), float(beta1), wa, per_edge)
     return _np_t_update_mixed(DN, rho1, sharp, flat, a, a_flat, beta1, w)
 
 

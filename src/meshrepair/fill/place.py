@@ -13,6 +13,7 @@ import numpy as np
 
 from ..holes import LIEPA_MAX_LOOP, HoleReport, enclose_holes, fair_vertices, self_intersections
 from ..holes.creases import find_crease_routes
+from ..holes.fairing import LIEPA_COT_RANGE
 from ..holes.triharmonic import fair_triharmonic
 from .patches import (
     _blocks,
@@ -83,9 +84,19 @@ def _place_patches(V: np.ndarray, F: np.ndarray, holes, skip: dict[int, str], *,
             ce = _crease_edges(reports)
             on_crease = np.unique(ce)
             free = np.setdiff1d(np.arange(nV, len(V1)), on_crease)
+            # Liepa's patches: bounded cotangents in the faces round them (anisotropic
+            # triangles, section 3e); planar patches keep the exact ones
+            liepa_f = np.zeros(len(F1), bool)
+            for i, (_, bf) in _blocks(reports, nV, nF).items():
+                if method[i] == "liepa":
+                    liepa_f[bf] = True
+            near = np.zeros(len(V1), bool)
+            near[F1[liepa_f].ravel()] = True
             V1 = fair_vertices(V1, F1, free, order=2, weights="cotan", iterations=3,
                                exclude_rows=on_crease, curvature=curvature,
-                               curvature_exclude=sharp_v)
+                               curvature_exclude=sharp_v,
+                               cot_range=LIEPA_COT_RANGE if liepa_f.any() else None,
+                               cot_faces=near[F1].any(axis=1))
             if triharmonic:
                 # curvature-continuous (triharmonic) candidate, two rings of the surround as
                 # data; kept per hole where it meets the surround more smoothly (section 3d)

@@ -66,8 +66,10 @@ def _polygon_is_simple(Q: np.ndarray) -> bool:
     return True
 
 
-def _cotan_weights_2d(X: np.ndarray, T: np.ndarray, n: int) -> sp.csr_matrix:
-    """Symmetric cotangent weight matrix (positive off-diagonal), shape ``(n, n)``."""
+def _cotan_weights_2d(X: np.ndarray, T: np.ndarray, n: int,
+                      cot_range: tuple[float, float] | None = None) -> sp.csr_matrix:
+    """Symmetric cotangent weight matrix (positive off-diagonal), shape ``(n, n)``; with
+    ``cot_range = (lo, hi)`` every angle's cotangent is clipped to ``[lo, hi]`` first."""
     rows, cols, vals = [], [], []
     P = X if X.shape[1] == 3 else np.c_[X, np.zeros(len(X))]
     c = np.cross(P[T[:, 1]] - P[T[:, 0]], P[T[:, 2]] - P[T[:, 0]])
@@ -75,6 +77,8 @@ def _cotan_weights_2d(X: np.ndarray, T: np.ndarray, n: int) -> sp.csr_matrix:
     for k in range(3):
         i, j, o = T[:, (k + 1) % 3], T[:, (k + 2) % 3], T[:, k]
         cot = np.einsum("ij,ij->i", P[i] - P[o], P[j] - P[o]) / dbl
+        if cot_range is not None:
+            cot = np.clip(cot, cot_range[0], cot_range[1])
         rows += [i, j]
         cols += [j, i]
         vals += [0.5 * cot, 0.5 * cot]

@@ -104,6 +104,9 @@ class CreaseEnd:
     straight_length : float
         How far back the chain stays on a straight line through the vertex (every chain vertex
         within :data:`STRAIGHT_TOL` degrees of the first edge's direction).
+    chain_id : int
+        The chain's first vertex off the loop (-1: unknown): two ends with the same id are one
+        crease that the loop cuts at two neighbouring vertices.
     """
 
     pos: int
@@ -113,6 +116,7 @@ class CreaseEnd:
     convex: bool
     chain_length: float = np.inf
     straight_length: float = np.inf
+    chain_id: int = -1
 
 
 @dataclass
@@ -256,7 +260,7 @@ def crease_ends(G: SharpGraph, loop: np.ndarray) -> list[CreaseEnd]:
             ends.append(CreaseEnd(pos=p_end, vertex=v_end, direction=d,
                                   angle=float(G.angle[ce].mean()),
                                   convex=bool(np.mean(G.convex[ce]) >= 0.5), chain_length=cl,
-                                  straight_length=sl))
+                                  straight_length=sl, chain_id=int(chain_v[1])))
     return ends
 
 
@@ -411,6 +415,92 @@ def _twin_corners(P: np.ndarray, ends: list[CreaseEnd]):
     return best[1], best[2]
 
 
+KINKED_PAIR_TURN = 60.0
+"""Largest angle (degrees) between a leftover crease end's direction and the chord to its
+partner for a *kinked pair* (:func:`_kinked_pairs`)."""
+
+
+def _lines_meet_ahead(pa: np.ndarray, da: np.ndarray, pb: np.ndarray, db: np.ndarray) -> bool:
+    """The lines ``pa + t da`` and ``pb + u db`` pass within :data:`CORNER_TOL` of the
+    distance of each other at ``t, u > 0`` (in front of both ends)."""
+    w = pa - pb
+    A = np.array([[da @ da, -(da @ db)], [da @ db, -(db @ db)]])
+    try:
+        t, u = np.linalg.solve(A, [-(w @ da), -(w @ db)])
+    except np.linalg.LinAlgError:
+        return False
+    if not (t > 0 and u > 0):
+        return False
+    return float(np.linalg.norm(pa + t * da - pb - u * db)) <= CORNER_TOL * min(t, u)
+
+
+def _kinked_pairs(P: np.ndarray, ends: list[CreaseEnd]) -> list[tuple[int, int]]:
+    """Pairs of crease ends left over by the pairs, corners and T-junctions that are one crease
+    kinking where it meets the loop: same convexity, dihedral angles within
+    :data:`PAIR_MAX_ANGLE_GAP`, both directions within :data:`KINKED_PAIR_TURN` of the chord,
+    chains at least :data:`CHAIN_PER_GAP` of the chord long, and the chord (not the kinked
+    directions) within :data:`PAIR_MAX_TILT` of the plane the hole spans. Greedy by alignment;
+    the chord inside the loop seen through its vector area (a chord passing over the surround
+    joins two different creases); two ends of one chain (the loop cutting a crease at two
+    neighbouring vertices, :attr:`CreaseEnd.chain_id`) are never both used; two ends whose
+    lines meet in front of both (:func:`_lines_meet_ahead`) are two creases of a corner whose
+    third crease was not found (fandisk creases r=16), not one crease. Routed straight:
+    on trim_star crease r=8 the crease arriving at one end bends by 58° there (its chain
+    outside zigzags by 15-30° per edge), while inside the hole it turns by 24° in all."""
+    from ._geom2d import _vector_area
+
+    va = _vector_area(P)
+    nva = float(np.linalg.norm(va))
+    nh = va / nva if nva > 0 else None
+    cos_turn = np.cos(np.radians(KINKED_PAIR_TURN))
+    sin_tilt = np.sin(np.radians(PAIR_MAX_TILT))
+    poly = None
+    if nh is not None:
+        from matplotlib.path import Path as MPath
+
+        from .planar import _plane_frame
+
+        e1, e2 = _plane_frame(-nh)
+        Q = np.c_[(P - P.mean(axis=0)) @ e1, (P - P.mean(axis=0)) @ e2]
+        poly = MPath(Q)
+    t_in = np.linspace(0.02, 0.98, 25)[:, None]
+    cand = []
+    for a in range(len(ends)):
+        for b in range(a + 1, len(ends)):
+            ea, eb = ends[a], ends[b]
+            if ea.pos == eb.pos or ea.convex != eb.convex or (
+                    ea.chain_id >= 0 and ea.chain_id == eb.chain_id):
+                continue
+            if abs(ea.angle - eb.angle) > PAIR_MAX_ANGLE_GAP:
+                continue
+            s = P[eb.pos] - P[ea.pos]
+            L = float(np.linalg.norm(s))
+            if not L > 0 or min(ea.chain_length, eb.chain_length) < CHAIN_PER_GAP * L:
+                continue
+            if nh is not None and abs(float(s @ nh)) > sin_tilt * L:
+                continue
+            ca, cb = float(ea.direction @ s) / L, float(-eb.direction @ s) / L
+            if not min(ca, cb) > cos_turn:
+                continue
+            if poly is not None and not poly.contains_points(
+                    Q[ea.pos] + t_in * (Q[eb.pos] - Q[ea.pos])).all():
+                continue  # the chord passes over the surround: not one crease across the hole
+            if _lines_meet_ahead(P[ea.pos], ea.direction, P[eb.pos], eb.direction):
+                continue  # two creases meeting at a corner whose third crease was not found
+            cand.append((ca + cb, a, b))
+    cand.sort(reverse=True)
+    used: set[int] = set()
+    out = []
+    for _, a, b in cand:
+        if a in used or b in used:
+            continue
+        out.append((a, b))
+        for i in (a, b):
+            used.update(j for j, e in enumerate(ends)
+                        if j == i or (e.chain_id >= 0 and e.chain_id == ends[i].chain_id))
+    return out
+
+
 def route_creases(V: np.ndarray, loop: np.ndarray, ends: list[CreaseEnd]) -> CreaseRoute | None:
     """Pair the crease ends of a loop and route them (None when there is nothing to route)."""
     P = V[loop]
@@ -520,6 +610,7 @@ def route_creases(V: np.ndarray, loop: np.ndarray, ends: list[CreaseEnd]) -> Cre
     seen: set[int] = set()
     rest = [e for e in rest if not (e.pos in seen or seen.add(e.pos))]
     points = np.asarray(points_t, float).reshape(-1, 3)
+    n_before_rest = len(kinds)
     if len(rest) >= MIN_CORNER:
         c = _corner_point(np.array([P[e.pos] for e in rest]),
                           np.array([e.direction for e in rest]),
@@ -550,6 +641,13 @@ def route_creases(V: np.ndarray, loop: np.ndarray, ends: list[CreaseEnd]) -> Cre
                 segs.append((kc, kc + 1))  # the crease joining the two corners
                 curves.append(np.stack([cs[0], cs[1] - cs[0], cs[1], cs[1] - cs[0]]))
                 kinds.append("corner")
+    if not any(kd == "corner" for kd in kinds[n_before_rest:]):
+        # leftover ends of one crease that bends where it meets the loop
+        for a, b in _kinked_pairs(P, rest):
+            p0, p1 = P[rest[a].pos], P[rest[b].pos]
+            segs.append((rest[a].pos, rest[b].pos))
+            curves.append(np.stack([p0, p1 - p0, p1, p1 - p0]))  # straight
+            kinds.append("kinked")
     if not segs:
         return None
     return CreaseRoute(points=points, segments=np.asarray(segs, np.int64).reshape(-1, 2),

@@ -10,12 +10,20 @@ from ..errors import MeshRepairError
 from ._fairing_common import _barycentric_areas, _free_mask, _laplacian, _usable_rows
 from ._geom2d import _cotan_weights_2d
 
+LIEPA_COT_RANGE = (0.3, 3.0)
+"""Cotangent bounds (angles 18.4°-73.3°) of the thin-plate fairing of patches enclosed by
+Liepa's triangulation (:mod:`meshrepair.fill.place`): its developed / mean-value layouts give
+anisotropic triangles, whose exact cotangents make the fairing follow the triangulation rather
+than the surround. Chosen on rocker_arm r=8 (docs/holes.md, section 3e)."""
+
 
 def fair_vertices(V: np.ndarray, F: np.ndarray, free: np.ndarray, *, order: int = 2,
                   weights: str = "cotan", iterations: int = 1,
                   exclude_rows: np.ndarray | None = None,
                   curvature: bool = False,
-                  curvature_exclude: np.ndarray | None = None) -> np.ndarray:
+                  curvature_exclude: np.ndarray | None = None,
+                  cot_range: tuple[float, float] | None = None,
+                  cot_faces: np.ndarray | None = None) -> np.ndarray:
     """Move the ``free`` vertices to a fair (harmonic or bi-Laplacian) position.
 
     ``order=2`` minimises ``sum_r A_r |(Δx)_r|²`` over the free vertices and their neighbours
@@ -45,6 +53,13 @@ def fair_vertices(V: np.ndarray, F: np.ndarray, free: np.ndarray, *, order: int 
         a sphere's hole is filled by the sphere, which the plain thin plate flattens).
     curvature_exclude : (nV,) bool or int indices, optional
         Vertices not used as curvature measurements (e.g. vertices on sharp edges).
+    cot_range : (lo, hi), optional
+        ``weights="cotan"`` only: clip every angle's cotangent to ``[lo, hi]`` in the fairing's
+        Laplacian (bounds the weight of nearly degenerate or obtuse angles, which an
+        anisotropic triangulation has: :data:`LIEPA_COT_RANGE`). The curvature measurement
+        keeps the exact cotangents.
+    cot_faces : (nF,) bool, optional
+        With ``cot_range``: clip only the angles of these faces (default: all).
 
     Returns
     -------
@@ -66,7 +81,12 @@ def fair_vertices(V: np.ndarray, F: np.ndarray, free: np.ndarray, *, order: int 
     rows[F[touch].ravel()] = True
     if order == 1:
         rows = fm.copy()
-    Floc = F[rows[F].any(axis=1)]
+    in_loc = rows[F].any(axis=1)
+    Floc = F[in_loc]
+    clip_loc = None
+    if cot_range is not None:
+        clip_loc = np.ones(len(Floc), bool) if cot_faces is None else \
+            np.asarray(cot_faces, bool)[in_loc]
     ok, on_bnd = _usable_rows(F, nV, fm, exclude_rows)
     rows &= ok
     r_idx = np.flatnonzero(rows)
@@ -80,7 +100,9 @@ def fair_vertices(V: np.ndarray, F: np.ndarray, free: np.ndarray, *, order: int 
         kappa = _curvature_field(V, F, fm, rows, on_bnd, ex)
     for _ in range(max(1, iterations)):
         if weights == "cotan":
-            W = _cotan_weights_2d(V, Floc, nV)
+            W = _cotan_weights_2d(V, Floc, nV) if clip_loc is None else (
+                _cotan_weights_2d(V, Floc[~clip_loc], nV)
+                + _cotan_weights_2d(V, Floc[clip_loc], nV, cot_range))
         else:
             e = np.sort(np.concatenate([Floc[:, [0, 1]], Floc[:, [1, 2]], Floc[:, [2, 0]]]),
                         axis=1)

@@ -1,0 +1,136 @@
+"""Synthetic damage for tests and benchmarks: geodesic discs, damaged regions, rigid motions and
+exactly mirror-symmetric meshes.
+
+These build the cut-and-repair cases of the test suite and of ``benchmarks/completion.py`` (a
+region of a known mesh is damaged and repaired, and the result is compared with the original),
+in the spirit of :func:`meshrepair.noise.add_noise`. Distances on the surface are shortest paths
+in the edge graph weighted by edge length (Dijkstra), an upper bound of the geodesic distance.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .errors import MeshRepairError
+from .geometry import mean_edge_length, vertex_normals
+
+DAMAGES = ("dent", "spike", "noise", "flat")
+"""The kinds of :func:`damage_region`."""
+
+
+def edge_graph_distances(V: np.ndarray, F: np.ndarray, sources, *,
+                         limit: float = np.inf) -> np.ndarray:
+    """Edge-graph distances from ``sources`` (a vertex index or a list of them).
+
+    Parameters
+    ----------
+    V : (nV, 3) float64
+    F : (nF, 3) int64
+    sources : int or sequence of int
+    limit : float
+        Distances above ``limit`` are not explored and come back as ``inf``.
+
+    Returns
+    -------
+    (nV,) float64 for one source, (len(sources), nV) for a list.
+    """
+    import scipy.sparse as sp
+    from scipy.sparse.csgraph import dijkstra
+
+    from .topology import edge_topology
+
+    e = edge_topology(F, len(V)).edges
+    w = np.linalg.norm(V[e[:, 0]] - V[e[:, 1]], axis=1)
+    G = sp.coo_matrix((np.r_[w, w], (np.r_[e[:, 0], e[:, 1]], np.r_[e[:, 1], e[:, 0]])),
+                      shape=(len(V), len(V))).tocsr()
+    return dijkstra(G, indices=sources, limit=limit)
+
+
+def geodesic_disc(V: np.ndarray, F: np.ndarray, center: int, radius: float, *,
+                  return_distances: bool = False):
+    """Faces whose three vertices lie within ``radius`` (edge-graph distance) of ``center``.
+
+    Returns
+    -------
+    faces : (k,) int64
+        Indices into ``F``.
+    d : (nV,) float64
+        Only with ``return_distances``: the distances from ``center``, ``inf`` beyond 1.5 r.
+    """
+    d = edge_graph_distances(V, F, center, limit=1.5 * radius)
+    faces = np.flatnonzero((d[F] <= radius).all(axis=1))
+    return (faces, d) if return_distances else faces
+
+
+def damage_region(V: np.ndarray, F: np.ndarray, faces: np.ndarray, d: np.ndarray,
+                  radius: float, kind: str, *, seed: int = 0) -> np.ndarray:
+    """A copy of ``V`` with the interior vertices of a disc region damaged.
+
+    The region's boundary loop is left intact. With ``l`` the mean edge length and ``n`` the
+    vertex normals: ``"dent"`` pushes vertex i in by ``2 l max(0, 1 - d_i / radius)`` along
+    ``-n_i``; ``"spike"`` lifts the vertex nearest the centre by ``5 l``; ``"noise"`` adds
+    isotropic Gaussian noise of deviation ``0.5 l``; ``"flat"`` projects the interior onto the
+    least-squares plane of the boundary.
+
+    Parameters
+    ----------
+    faces : (k,) int64
+        The region, e.g. from :func:`geodesic_disc`; it must have one boundary loop.
+    d : (nV,) float64
+        Distances from the region's centre (as returned by :func:`geodesic_disc`).
+    kind : {"dent", "spike", "noise", "flat"}
+    """
+    from .topology import boundary_loops
+
+    if kind not in DAMAGES:
+        raise MeshRepairError(f"unknown damage {kind!r}: use one of {', '.join(DAMAGES)}")
+    b = boundary_loops(F[faces], len(V))[0]
+    inner = np.setdiff1d(np.unique(F[faces]), b)
+    l = mean_edge_length(V, F)
+    Vd = np.array(V, dtype=float, copy=True)
+    if kind == "dent":
+        N = vertex_normals(V, F)
+        Vd[inner] -= (2 * l * np.clip(1 - d[inner] / radius, 0, 1))[:, None] * N[inner]
+    elif kind == "spike":
+        N = vertex_normals(V, F)
+        c = inner[np.argmin(d[inner])]
+        Vd[c] += 5 * l * N[c]
+    elif kind == "noise":
+        Vd[inner] += 0.5 * l * np.random.default_rng(seed).normal(size=(len(inner), 3))
+    else:  # flat
+        c = V[b].mean(axis=0)
+        n = np.linalg.svd(V[b] - c)[2][2]
+        Vd[inner] -= ((V[inner] - c) @ n)[:, None] * n
+    return Vd
+
+
+def random_rigid(seed: int, shift: float) -> np.ndarray:
+    """A random rotation and a translation of typical length ``shift``, as a (4, 4) matrix."""
+    from scipy.spatial.transform import Rotation
+
+    T = np.eye(4)
+    T[:3, :3] = Rotation.random(random_state=seed).as_matrix()
+    T[:3, 3] = shift * np.random.default_rng(seed).normal(size=3)
+    return T
+
+
+def symmetrize(V: np.ndarray, F: np.ndarray, axis: int = 0) -> tuple[np.ndarray, np.ndarray]:
+    """An exactly mirror-symmetric mesh: the half of ``(V, F)`` on one side of the plane through
+    the centroid normal to ``axis``, and its mirror image, welded on the plane."""
+    import trimesh
+
+    c = V.mean(axis=0)
+    n = np.zeros(3)
+    n[axis] = 1.0
+    Vh, Fh = trimesh.intersections.slice_faces_plane(V, F, n, c)[:2]
+    Vh = np.asarray(Vh, float).copy()
+    Fh = np.asarray(Fh, np.int64)
+    on = np.abs(Vh[:, axis] - c[axis]) < 1e-12
+    Vh[on, axis] = c[axis]
+    Vm = Vh.copy()
+    Vm[:, axis] = 2 * c[axis] - Vm[:, axis]
+    W = trimesh.Trimesh(np.vstack([Vh, Vm]), np.vstack([Fh, Fh[:, ::-1] + len(Vh)]),
+                        process=False)
+    W.merge_vertices(digits_vertex=10)
+    W.remove_unreferenced_vertices()
+    return np.asarray(W.vertices, float), np.asarray(W.faces, np.int64)
