@@ -13,6 +13,13 @@ feature iterations; 0 or absent: the full default schedule).
 Each call prints one line: its wall time, the time and iterations of each solver run inside it
 (with the default schedule: the robust probe, then the main run) and the rest (validation,
 topology, ordering, noise statistics, regions, unfolding), and the process's peak RSS so far.
+With ``K > 1`` it also prints the CPU time of the warm calls (min and median of calls 2..K), so
+alternating old and new processes also gives the warm-call ratio without the fixed costs::
+
+    for i in 1 2 3 4 5; do
+      PYTHONPATH=/tmp/base  python benchmarks/_ab.py M.npz 6
+      PYTHONPATH=/tmp/after python benchmarks/_ab.py M.npz 6
+    done
 """
 
 import os
@@ -48,14 +55,19 @@ if __name__ == "__main__":
 
     solver.ADMMSolver.solve = timed_solve
     kw = {} if its == 0 else {"robust_iters": its // 2, "feature_iters": its - its // 2}
+    cpu = []
     with threadpool_limits(1):
         for _ in range(k):
             runs.clear()
-            t0 = time.perf_counter()
+            t0, c0 = time.perf_counter(), time.process_time()
             denoise(Vn, F, **kw)
             total = time.perf_counter() - t0
+            cpu.append(time.process_time() - c0)
             rss = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
             print(f"denoise {total:.2f} s; solver runs: "
                   + ", ".join(f"{s:.2f} s ({n} its)" for s, n in runs)
                   + f"; outside them {total - sum(s for s, _ in runs):.2f} s; "
                   f"peak RSS {rss:.0f} MB", flush=True)
+    if k > 1:  # the warm calls (all but the first), for paired in-process comparisons
+        w = sorted(cpu[1:])
+        print(f"warm call CPU s: min {w[0]:.4f} median {w[len(w) // 2]:.4f}")

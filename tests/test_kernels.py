@@ -295,16 +295,12 @@ def test_fused_t_update_matches_separate_kernels(mesh, rng, a, a_flat, beta1, w,
         t_from_normals(N, l, fa, fb, rho1, sharp, flat, a=a, a_flat=a_flat, beta1=0.5 * a, w=w)
 
 
-def test_anchor_step_kernel_agrees(mesh, rng):
-    from meshrepair._kernels.anchor import _nb_anchor_step, _np_anchor_step
+def test_anchor_with_unit_weight_projects_onto_the_normal_lines(mesh, rng):
     from meshrepair.fidelity import tangential_anchor
 
     V, F = mesh
     V0 = V + 0.1 * rng.normal(size=V.shape)
     n = K._np_vertex_normals(V, F)
-    w = rng.random(len(V))
-    out = _nb_anchor_step(V, V0, n, w)
-    assert np.allclose(out, _np_anchor_step(V, V0, n, w), rtol=0, atol=1e-14)
     # w = 1 projects onto the normal line through V0: the tangential part of V - V0 vanishes
     one = tangential_anchor(V, V0, F, np.ones(len(V)))
     d = one - V0

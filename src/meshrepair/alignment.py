@@ -34,6 +34,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .complete_modes import ICP_MODES  # the CLI reads it there
 from .correspondence import (
     CyclicAlignment,
     arc_length_parameters,
@@ -56,7 +57,6 @@ log = logging.getLogger(__name__)
 
 __all__ = ["ICP_MODES", "Placement", "alignment_report", "place_template"]
 
-ICP_MODES = ("auto", "context", "boundary", "surface", "none")
 #: boundary or context RMS residual (mean edge lengths) above which a warning is logged
 WARN_RESIDUAL = 0.5
 

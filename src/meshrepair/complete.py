@@ -74,6 +74,7 @@ from .complete_input import (  # noqa: F401  (re-exported: the public API of thi
     load_transform,
     region_from_vertices,
 )
+from .complete_modes import MODES, ORIENTATIONS  # the CLI reads them there
 from .complete_result import CompletionResult
 from .errors import MeshRepairError
 from .geometry import mean_edge_length
@@ -91,8 +92,6 @@ log = logging.getLogger(__name__)
 __all__ = ["MODES", "CompletionResult", "complete", "extract_patch", "load_transform",
            "region_from_vertices"]
 
-MODES = ("smooth", "sharp", "adaptive")
-ORIENTATIONS = ("template", "auto")
 
 
 # ------------------------------------------------------------------------------------------------

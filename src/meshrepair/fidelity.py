@@ -31,7 +31,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from . import _kernels as _k
+from ._kernels.fidelity import tangential_anchor as _anchor_kernel
 
 
 def prox_group_l1(R: np.ndarray, delta: float | np.ndarray) -> np.ndarray:
@@ -105,9 +105,4 @@ def tangential_anchor(V: np.ndarray, V0: np.ndarray, F: np.ndarray, weight: np.n
     -------
     (nV, 3) new array
     """
-    from ._kernels.anchor import anchor_step
-
-    V = np.ascontiguousarray(V, dtype=np.float64)
-    n = _k.vertex_normals(V, F)
-    return anchor_step(V, np.ascontiguousarray(V0, dtype=np.float64), n,
-                       np.ascontiguousarray(weight, dtype=np.float64))
+    return _anchor_kernel(V, V0, F, weight)  # one compiled pass (numpy twin without numba)

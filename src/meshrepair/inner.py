@@ -18,6 +18,7 @@ import scipy.sparse as sp
 
 from . import _fused
 from . import _kernels as _k
+from ._select import median  # np.median's value by one selection
 
 STIFF_RATIO = 30.0  # vertices stiffer than this many times the median get a smaller step
 INNER_SOLVERS = ("armijo", "gd", "heavy_ball", "lbfgs", "bfgs")
@@ -79,7 +80,7 @@ class VSubproblem:
         e, grad, h = _fused.venergy_grad_hdiag(V, self.F, self.z, self.V0, self.wfid, self.S)
         if self.free is not None:
             grad[~self.free] = 0.0
-        return e, grad, h, max(STIFF_RATIO * float(np.median(h)), 1e-300)
+        return e, grad, h, max(STIFF_RATIO * median(h), 1e-300)
 
     def energy_at(self, V: np.ndarray, d: np.ndarray, step: float, out: np.ndarray) -> float:
         """Write ``V + step d`` into ``out`` and return ``J_V`` there (one fused pass)."""
@@ -103,7 +104,7 @@ class VSubproblem:
         h = _k.vhess_diag(V, self.F, self.z, self.wfid)
         # only vertices stiffer than the typical one are slowed down: on a regular mesh this is
         # plain gradient descent, and slivers no longer dictate the step of everyone else
-        return np.maximum(h, max(STIFF_RATIO * float(np.median(h)), 1e-300))
+        return np.maximum(h, max(STIFF_RATIO * median(h), 1e-300))
 
 
 @dataclass

@@ -28,7 +28,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from .penalties import mc_penalty, prox_mc, t_update
+from ._kernels.priors import t_update_mixed as _t_update_mixed_kernel
+from .penalties import mc_penalty
 
 
 def t_update_mixed(DN: np.ndarray, rho1: np.ndarray, sharp: np.ndarray, flat: np.ndarray, *,
@@ -50,22 +51,8 @@ def t_update_mixed(DN: np.ndarray, rho1: np.ndarray, sharp: np.ndarray, flat: np
     -------
     (nE, 3)
     """
-    w = np.asarray(willmore_weight, dtype=np.float64)
-    if w.ndim == 0:
-        t = t_update(DN, rho1, sharp, a=a, beta1=beta1, willmore_weight=float(w))
-    else:  # per-edge weights: the Willmore closed form edge by edge, then the sharp edges
-        sharp = np.asarray(sharp, bool)
-        base = beta1 * DN + rho1
-        t = base / (beta1 + 2.0 * w)[:, None]
-        if sharp.any():
-            t[sharp] = prox_mc(base[sharp] / beta1, a, beta1)
-    if flat is None:
-        return t
-    f = np.flatnonzero(np.asarray(flat, bool) & ~np.asarray(sharp, bool))
-    if len(f):
-        base = beta1 * DN[f] + rho1[f]
-        t[f] = prox_mc(base / beta1, a_flat, beta1)
-    return t
+    # one compiled edge pass (_kernels.priors; its numpy twin without numba)
+    return _t_update_mixed_kernel(DN, rho1, sharp, flat, a, a_flat, beta1, willmore_weight)
 
 
 def reg_energy_mixed(t: np.ndarray, sharp: np.ndarray, flat: np.ndarray, *, a: float,

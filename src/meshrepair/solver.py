@@ -29,13 +29,14 @@ import numpy as np
 
 from . import _fused
 from . import _kernels as _k
+from ._kernels.priors import lengths_reg_energy_mixed
 from ._kernels.tstep import t_from_normals
 from ._memory import heap_allocations
 from .fidelity import prox_group_l1, tangential_anchor
 from .inner import INNER_SOLVERS, InnerState, VSubproblem, run_inner
 from .linear import N_SOLVERS, NormalSystem, solve_normals
 from .penalties import mc_penalty
-from .priors import reg_energy_mixed, t_update_mixed
+from .priors import t_update_mixed
 from .relax import TangentialRelaxer
 from .topology import Topology, edge_topology
 
@@ -424,15 +425,12 @@ class ADMMSolver:
                     rel = _fused.rel_change(Vn, V)
                     V = Vn
                     k += 1
-                    l, reg = _fused.lengths_reg_energy(V, E_int, Nv, fa, fb, sh, stage.a,
-                                                       o.willmore_weight)
-                    if mixed:  # flat-TV edges: replace their Willmore value by the MC value
-                        f = np.flatnonzero(fl & ~sh)
-                        tf = l[f, None] * (Nv[fa[f]] - Nv[fb[f]])
-                        reg += reg_energy_mixed(tf, np.zeros(len(f), bool), np.ones(len(f), bool),
-                                                a=stage.a, a_flat=stage.flat_a,
-                                                willmore_weight=o.willmore_weight)
-                        reg -= o.willmore_weight * float(np.einsum("ij,ij->", tf, tf))
+                    if mixed:  # flat-TV edges: the MC value of flat_a instead of Willmore
+                        l, reg = lengths_reg_energy_mixed(V, E_int, Nv, fa, fb, sh, fl, stage.a,
+                                                          stage.flat_a, o.willmore_weight)
+                    else:
+                        l, reg = _fused.lengths_reg_energy(V, E_int, Nv, fa, fb, sh, stage.a,
+                                                           o.willmore_weight)
                     if w_int is not None:  # per-edge Willmore weights on the smooth edges
                         f = np.flatnonzero(~sh & ~fl) if mixed else np.flatnonzero(~sh)
                         tf = l[f, None] * (Nv[fa[f]] - Nv[fb[f]])

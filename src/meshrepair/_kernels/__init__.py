@@ -12,7 +12,8 @@ from __future__ import annotations
 # split by concept: _jit (numba detection, njit, FASTMATH), faces (per-face geometry, the
 # V-subproblem), edges (per-edge gathers), admm (PCG, t update, multipliers, regulariser),
 # connectivity (setup kernels); every name is re-exported here. tstep (the t-update from N in
-# one pass) and anchor (the tangential anchor's step) are imported from their modules.
+# one pass), fidelity (the tangential anchor) and priors (the flat-TV / per-edge-weight t-update)
+# are imported from their modules.
 from ._jit import CACHE_DISABLED, FASTMATH, HAVE_NUMBA, njit  # noqa: F401
 from .admm import (  # noqa: F401
     _np_normalize_z,

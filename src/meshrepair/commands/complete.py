@@ -215,7 +215,7 @@ def alignment_summary(res) -> str:
 
 def add_complete_options(p, *, required: bool = True) -> None:
     """The completion options of ``meshrepair complete`` (shared with ``meshrepair batch``)."""
-    from ..complete import ICP_MODES, MODES, ORIENTATIONS
+    from ..complete_modes import ICP_MODES, MODES, ORIENTATIONS  # not the task: no numba
 
     g = p.add_mutually_exclusive_group(required=required)
     g.add_argument("--region", metavar="FILE",

@@ -1,0 +1,68 @@
+"""Kernel of the tangential anchor (:func:`meshrepair.fidelity.tangential_anchor`): the
+area-weighted vertex normals of ``V`` and the removal of the weighted tangential part of
+``V - V⁰`` in one face pass and one vertex pass, with no numpy temporaries (it runs after every
+V-step on CAD regions; 104 → 65 µs of CPU per call on a 4,610-vertex mesh, where the numpy
+expressions were 5 % of a default denoise: docs/performance.md). Same arithmetic as
+``_kernels.vertex_normals`` followed by the numpy expression of the twin, in the same order
+(the dot product summed as numpy's ``einsum`` sums it): results equal bit for bit, so the
+iterates of the solver do not change (a rounding-level change moved the MSAE of the chaotic
+fandisk γ0.7 row by +4.6 %)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ._jit import HAVE_NUMBA, njit
+
+
+def _np_tangential_anchor(V, V0, F, weight):
+    from .faces import _np_vertex_normals
+
+    n = _np_vertex_normals(V, F)
+    d = V - V0
+    dt = d - np.einsum("ij,ij->i", d, n)[:, None] * n
+    return V - np.asarray(weight, dtype=np.float64)[:, None] * dt
+
+
+if HAVE_NUMBA:
+    from .faces import _tri
+
+    @njit(cache=True)
+    def _nb_tangential_anchor(V, V0, F, weight):  # pragma: no cover - compiled
+        nV = V.shape[0]
+        vn = np.zeros((nV, 3))
+        for m in range(F.shape[0]):  # the loop of _nb_vertex_normals
+            i, j, k = F[m, 0], F[m, 1], F[m, 2]
+            ax, ay, az, bx, by, bz, cx, cy, cz = _tri(V, i, j, k)
+            for v in (i, j, k):
+                vn[v, 0] += cx
+                vn[v, 1] += cy
+                vn[v, 2] += cz
+        out = np.empty_like(V)
+        for v in range(nV):
+            q = np.sqrt(vn[v, 0] ** 2 + vn[v, 1] ** 2 + vn[v, 2] ** 2)
+            n0, n1, n2 = vn[v, 0], vn[v, 1], vn[v, 2]
+            if q > 0:
+                n0 /= q
+                n1 /= q
+                n2 /= q
+            d0 = V[v, 0] - V0[v, 0]
+            d1 = V[v, 1] - V0[v, 1]
+            d2 = V[v, 2] - V0[v, 2]
+            dn = (d0 * n0 + d2 * n2) + d1 * n1  # numpy's einsum order: equal bit for bit
+            w = weight[v]
+            out[v, 0] = V[v, 0] - w * (d0 - dn * n0)
+            out[v, 1] = V[v, 1] - w * (d1 - dn * n1)
+            out[v, 2] = V[v, 2] - w * (d2 - dn * n2)
+        return out
+
+
+def tangential_anchor(V, V0, F, weight):
+    """``V - weight_i P_i (V_i - V⁰_i)`` with ``P_i = I - n_i n_iᵀ``, ``n_i`` the area-weighted
+    unit vertex normal of ``V`` (a new ``(nV, 3)`` array)."""
+    if HAVE_NUMBA:
+        return _nb_tangential_anchor(np.ascontiguousarray(V, dtype=np.float64),
+                                     np.ascontiguousarray(V0, dtype=np.float64),
+                                     np.ascontiguousarray(F, dtype=np.int64),
+                                     np.ascontiguousarray(weight, dtype=np.float64))
+    return _np_tangential_anchor(V, V0, F, weight)
