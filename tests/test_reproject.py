@@ -9,6 +9,7 @@ from meshrepair.reproject import (
     closest_points_local,
     reanchor,
     residual_tangential_ratio,
+    tangential_smooth,
 )
 
 from .conftest import shared_mesh
@@ -112,15 +113,18 @@ def test_reanchor_removes_synthetic_tangential_shift_on_sphere():
 def test_reanchor_fidelity_never_increases():
     """π_S(V⁰_i) is the closest point of S and V_i lies on S, so ||π_S(V⁰_i) - V⁰_i|| ≤
     ||V_i - V⁰_i||; the blend is on a segment of a convex function, so every weight in [0, 1]
-    keeps the fidelity at or below the result's."""
+    keeps the fidelity at or below the result's (μ = 0: per vertex; with the tangential
+    smoothing, μ > 0, a vertex may trade fidelity for smoothness, the total still drops)."""
     V, F = _icosphere(3)
     rng = np.random.default_rng(4)
     V0 = V + rng.normal(0, 0.02, V.shape)
     X = closest_points_local(V, F, V0)
     assert np.all(np.linalg.norm(X - V0, axis=1) <= np.linalg.norm(V - V0, axis=1) + 1e-12)
     for kappa in (0.0, 0.3, 1.0):
-        Vn, w = reanchor(V, V0, F, kappa=kappa)
+        Vn, w = reanchor(V, V0, F, kappa=kappa, mu=0.0)
         assert np.all(((Vn - V0) ** 2).sum(1) <= ((V - V0) ** 2).sum(1) + 1e-12)
+        Vs, _ = reanchor(V, V0, F, kappa=kappa)
+        assert ((Vs - V0) ** 2).sum() <= ((V - V0) ** 2).sum()
 
 
 def test_blend_weights_formula_and_inactive():
@@ -180,7 +184,8 @@ def test_reanchor_equivariant():
 def test_denoise_reanchor_organic_ev():
     """nllr_igea (noise along the normals): the re-anchoring runs on the smooth region and
     brings the per-vertex error E_V close to NLLR's published output (ratio 1.58 before, 1.13
-    measured; MSAE ratio 1.13 → 1.09); on random-direction noise it stays off."""
+    after round 5, 1.11 with the round-6 tangential smoothing; MSAE ratio 1.13 → 1.09 → 1.07);
+    on random-direction noise it stays off."""
     from meshrepair import add_noise, denoise, msae, vertex_error
 
     Vn, F = shared_mesh("published/nllr_igea__noisy.ply")
@@ -189,8 +194,8 @@ def test_denoise_reanchor_organic_ev():
     r = denoise(Vn, F)
     assert r.params["reanchored"] > 0.8 * len(Vn)
     assert r.params["reanchor_ratio"] < 0.6
-    assert vertex_error(r.V, Vt) < 1.2 * vertex_error(Vp, Vt)
-    assert msae(r.V, Vt, F) < 1.12 * msae(Vp, Vt, F)
+    assert vertex_error(r.V, Vt) < 1.12 * vertex_error(Vp, Vt)  # 1.13 without round 6
+    assert msae(r.V, Vt, F) < 1.085 * msae(Vp, Vt, F)  # 1.091 without round 6
     Vs, Fs = shared_mesh("spot.ply")
     r2 = denoise(add_noise(Vs, Fs, 0.4, direction="random", seed=7), Fs)
     assert r2.params["reanchored"] == 0 and r2.params["reanchor_ratio"] > 0.6
@@ -208,7 +213,9 @@ def test_reanchor_never_turns_a_face_over():
     i = 3 * 8 + 3
     V0[i, 0] += 1.5
     V0[:, 2] += 0.1  # normal offset only elsewhere
-    Vn, w = reanchor(V, V0, F, kappa=0.0, topo=topo)
+    Vs, _ = reanchor(V, V0, F, kappa=0.0, topo=topo)  # with the smoothing: still no fold
+    assert not locally_flipped_faces(Vs, topo).any()
+    Vn, w = reanchor(V, V0, F, kappa=0.0, mu=0.0, topo=topo)
     assert not locally_flipped_faces(Vn, topo).any()
     assert w[i] == 0 and np.array_equal(Vn[i], V[i])
     # the rest is the exact projection (a pure normal offset: nothing moves)
@@ -216,3 +223,82 @@ def test_reanchor_never_turns_a_face_over():
     # without the guard the step would have folded faces
     X = closest_points_local(V, F, V0)
     assert locally_flipped_faces(X, topo).any()
+
+
+def _umbrella_rows(F, nV, c):
+    from meshrepair.topology import edge_topology
+
+    e = edge_topology(F, nV).edges
+    A = np.zeros((nV, nV))
+    A[e[:, 0], e[:, 1]] = c[e[:, 1]]
+    A[e[:, 1], e[:, 0]] = c[e[:, 0]]
+    return A / A.sum(1, keepdims=True)
+
+
+def test_tangential_smooth_is_the_linear_solve_on_a_plane():
+    """On the plane z = 0 (n = e_z) the Jacobi sweeps converge to the solution of
+    ((1 + μ) I - μ W_w)(Y - B) = T - B on the active rows (inactive rows fixed at T), in x and y,
+    with the residual shrinking by at least μ/(1+μ) per sweep; z is never changed."""
+    V, F = _grid(7)
+    nV = len(V)
+    rng = np.random.default_rng(11)
+    B = V + np.c_[rng.normal(0, 0.1, (nV, 2)), rng.normal(0, 0.3, nV)]
+    T = V + np.c_[rng.normal(0, 0.2, (nV, 2)), rng.normal(0, 0.3, nV)]
+    c = rng.uniform(0.2, 1.0, nV)
+    act = rng.random(nV) < 0.7
+    n = np.tile([0.0, 0.0, 1.0], (nV, 1))
+    mu = 0.8
+    Wd = _umbrella_rows(F, nV, c)
+    M = (1 + mu) * np.eye(nV) - mu * Wd
+    a, f = np.flatnonzero(act), np.flatnonzero(~act)
+    exact = T.copy()
+    rhs = (T - B)[a] + mu * Wd[np.ix_(a, f)] @ (T - B)[f]
+    exact[a, :2] = B[a, :2] + np.linalg.solve(M[np.ix_(a, a)], rhs[:, :2])
+    Y = tangential_smooth(T, n, F, act, base=B, weights=c, mu=mu, sweeps=200)
+    assert np.allclose(Y, exact, atol=1e-10)
+    assert np.array_equal(Y[:, 2], T[:, 2]) and np.array_equal(Y[~act], T[~act])
+    err = [np.abs(tangential_smooth(T, n, F, act, base=B, weights=c, mu=mu, sweeps=k)
+                  - exact).max() for k in (4, 5)]
+    assert err[1] <= mu / (1 + mu) * err[0] * (1 + 1e-9) + 1e-15  # max-norm contraction
+    assert np.array_equal(tangential_smooth(T, n, F, act, base=B, mu=0.0), T)
+
+
+def test_tangential_smooth_reduces_tangential_jitter_on_a_plane():
+    """Truth: a plane grid; data V⁰: truth + noise along the normal (its tangential layout is
+    exact); targets T: on the surface (z = 0) with independent tangential jitter. Smoothing the
+    displacement from V⁰ brings T closer to the truth tangentially, the surface is unchanged,
+    and a larger μ removes more of the (white) jitter."""
+    V, F = _grid(16)
+    nV = len(V)
+    rng = np.random.default_rng(12)
+    V0 = V + np.c_[np.zeros((nV, 2)), rng.normal(0, 0.3, nV)]
+    T = V + np.c_[rng.normal(0, 0.1, (nV, 2)), np.zeros(nV)]
+    border = (V[:, 0] == 0) | (V[:, 0] == 15) | (V[:, 1] == 0) | (V[:, 1] == 15)
+    n = np.tile([0.0, 0.0, 1.0], (nV, 1))
+
+    def rms(Y):
+        return np.sqrt(((Y - V)[~border] ** 2).sum(1).mean())
+
+    errs = [rms(tangential_smooth(T, n, F, ~border, base=V0, mu=mu, sweeps=20))
+            for mu in (0.0, 0.5, 2.0)]
+    assert errs[0] == pytest.approx(rms(T))
+    assert errs[2] < errs[1] < 0.8 * errs[0]
+    Y = tangential_smooth(T, n, F, ~border, base=V0, mu=0.5)
+    assert np.array_equal(Y[:, 2], T[:, 2])  # still on the plane
+
+
+def test_tangential_smooth_equivariant():
+    V, F = _icosphere(2)
+    rng = np.random.default_rng(13)
+    from meshrepair import _kernels as K
+
+    n = K.vertex_normals(np.ascontiguousarray(V), F)
+    T = V + 0.02 * rng.normal(size=V.shape)
+    B = V * (1 + rng.normal(0, 0.03, (len(V), 1)))
+    c = rng.uniform(0.1, 1, len(V))
+    act = rng.random(len(V)) < 0.8
+    a = tangential_smooth(T, n, F, act, base=B, weights=c)
+    Q, _ = np.linalg.qr(rng.normal(size=(3, 3)))
+    s, t = 3.0, np.r_[-1.0, 2.0, 0.25]
+    b = tangential_smooth(s * T @ Q.T + t, n @ Q.T, F, act, base=s * B @ Q.T + t, weights=c)
+    assert np.allclose(b, s * a @ Q.T + t, atol=1e-9)

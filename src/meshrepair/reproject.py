@@ -43,6 +43,27 @@ pulling towards when the noise lay along the normals. After the solve this shows
 0.13-0.56 on every normal-direction and impulsive input of the shared set, 0.78-1.45 on
 random-direction noise (measured in docs/parameters.md); the step runs when ρ_t < 0.6.
 
+Tangential regularisation (round 6, :func:`tangential_smooth`). The blended targets
+``T_i = V_i + w_i (π_S(V⁰_i) - V_i)`` still carry vertex-scale tangential jitter (the κ d_i tilt
+of each foot, independent from vertex to vertex), while for noise along the normals the data's
+tangential layout is right: the tangential part of the displacement ``Y - V⁰`` from the data is
+smooth across vertices. So the targets are replaced by the minimiser over tangential moves of
+
+.. math:: \\sum_i \\|Y_i - T_i\\|^2
+          + μ \\sum_i \\|P_i \\big((Y - V^0)_i - (W_w (Y - V^0))_i\\big)\\|^2,
+
+``P_i = I - n_i n_iᵀ`` the tangent projector at the solve's vertex normal and ``W_w`` the
+neighbour mean weighted by the blend weights ``w_j`` (far-thrown impulses, ``w_j ≈ 0``, do not
+enter their neighbours' means); its local (Jacobi) form is one implicit step of time μ of the
+weighted umbrella flow of the displacement field,
+``((1 + μ) I - μ W_w)(Y - V⁰) = T - V⁰`` tangentially, solved by the sweeps
+``Y_i ← Y_i + P_i((T_i + μ (V⁰_i + (W_w (Y - V⁰))_i))/(1 + μ) - Y_i)`` (contraction factor
+``μ/(1+μ)``) and put back on S by ``π_S``. On a plane it is the exact linear solve (tested); it
+commutes with rotations, translations and uniform scaling. Turn-over guard in two levels: the
+vertices of a face the smoothed step would reverse take the unsmoothed target ``T_i``, and if
+that still reverses a face, the solve's position. ``μ = REANCHOR_MU`` (docs/parameters.md,
+round 6).
+
 The search is local: a data vertex is near its result vertex (drift of a fraction of an edge),
 so the candidates are the faces of the ``rings``-ring of the result vertex i and of the result
 vertex nearest to ``V⁰_i``; every candidate triangle gets the exact point-triangle closest
@@ -175,12 +196,78 @@ def closest_points_local(V: np.ndarray, F: np.ndarray, P: np.ndarray, *,
 REANCHOR_KAPPA = 0.3
 """``κ`` of the blend weights (module docstring)."""
 
+REANCHOR_MU = 0.5
+"""``μ`` of the tangential regularisation of the targets (module docstring, round 6)."""
+
+REANCHOR_SWEEPS = 3
+"""Jacobi sweeps of :func:`tangential_smooth` (residual factor ``(μ/(1+μ))³ ≈ 0.04``)."""
+
+
+def tangential_smooth(T: np.ndarray, n: np.ndarray, F: np.ndarray, active: np.ndarray, *,
+                      base: np.ndarray | None = None, weights: np.ndarray | None = None,
+                      mu: float = 0.5, sweeps: int = REANCHOR_SWEEPS,
+                      topo: Topology | None = None) -> np.ndarray:
+    """Jacobi sweeps for ``((1 + μ) I - μ W_w)(Y - B) = T - B`` restricted to tangential moves.
+
+    ``Y_i ← Y_i + P_i((T_i + μ (B_i + (W_w (Y - B))_i))/(1 + μ) - Y_i)`` on ``active``
+    vertices, starting from ``Y = T``, with ``P_i = I - n_i n_iᵀ``, ``B`` the base (the data
+    ``V⁰``; zero smooths the positions themselves) and ``W_w`` the mean over the edge neighbours
+    weighted by ``weights`` (uniform by default); inactive vertices stay at ``T``. With ``n``
+    constant (a plane) and many sweeps it is the exact solve of the linear system on the
+    active rows.
+
+    Parameters
+    ----------
+    T : (nV, 3) float64, the targets
+    n : (nV, 3) float64, unit normals defining the tangent planes
+    F : (nF, 3) int64
+    active : (nV,) bool
+    base : (nV, 3) float64, optional, ``B`` (default zeros)
+    weights : (nV,) float64 >= 0, optional, the neighbour weights of ``W_w`` (default ones)
+    mu : float >= 0, the implicit step's time (0 returns ``T``)
+    sweeps : int >= 0
+    topo : Topology, optional
+
+    Returns
+    -------
+    (nV, 3) float64, a new array (not projected onto the surface)
+    """
+    T = np.asarray(T, dtype=np.float64)
+    Y = T.copy()
+    act = np.asarray(active, bool)
+    if mu <= 0 or sweeps <= 0 or not act.any():
+        return Y
+    nV = len(T)
+    if topo is None:
+        from .topology import edge_topology
+
+        topo = edge_topology(np.asarray(F, dtype=np.int64), nV)
+    B = np.zeros_like(T) if base is None else np.asarray(base, dtype=np.float64)
+    c = np.ones(nV) if weights is None else np.asarray(weights, dtype=np.float64)
+    e = topo.edges
+    A = sp.coo_matrix((np.r_[c[e[:, 1]], c[e[:, 0]]], (np.r_[e[:, 0], e[:, 1]],
+                                                          np.r_[e[:, 1], e[:, 0]])),
+                      shape=(nV, nV)).tocsr()
+    s = np.asarray(A.sum(axis=1)).ravel()
+    W = (sp.diags(np.where(s > 0, 1.0 / np.where(s > 0, s, 1.0), 0.0)) @ A).tocsr()[act]
+    has = s[act] > 0  # a vertex whose neighbours all weigh 0 keeps its own displacement
+    na = np.asarray(n, dtype=np.float64)[act]
+    Ta, Ba = T[act], B[act]
+    for _ in range(int(sweeps)):
+        Da = Y[act] - Ba
+        M = np.where(has[:, None], W @ (Y - B), Da)
+        d = (Ta + mu * (Ba + M)) / (1.0 + mu) - Y[act]
+        d -= np.einsum("ij,ij->i", d, na)[:, None] * na
+        Y[act] += d
+    return Y
+
 
 def reanchor(V: np.ndarray, V0: np.ndarray, F: np.ndarray, active: np.ndarray | None = None,
-             *, kappa: float = REANCHOR_KAPPA, topo: Topology | None = None
-             ) -> tuple[np.ndarray, np.ndarray]:
+             *, kappa: float = REANCHOR_KAPPA, mu: float = REANCHOR_MU,
+             topo: Topology | None = None) -> tuple[np.ndarray, np.ndarray]:
     """The result with its vertices moved along the result surface towards the data's closest
-    points: ``V_i + w_i (π_S(V⁰_i) - V_i)`` (see the module docstring).
+    points: ``V_i + w_i (π_S(V⁰_i) - V_i)``, smoothed tangentially by :func:`tangential_smooth`
+    and put back on S (see the module docstring).
 
     Parameters
     ----------
@@ -190,6 +277,7 @@ def reanchor(V: np.ndarray, V0: np.ndarray, F: np.ndarray, active: np.ndarray | 
     active : (nV,) bool, the vertices to move (default all); boundary vertices of open meshes
         never move (their closest point can leave the border)
     kappa : ``κ`` of :func:`blend_weights` (0: the exact projection, ``w = 1``)
+    mu : ``μ`` of :func:`tangential_smooth` (0: the targets unsmoothed, round 5)
     topo : Topology, optional (built when omitted)
 
     Returns
@@ -225,13 +313,21 @@ def reanchor(V: np.ndarray, V0: np.ndarray, F: np.ndarray, active: np.ndarray | 
     from . import _kernels as _k
 
     n_old = _k.face_normals(np.ascontiguousarray(V), F)
+    T = V + w[:, None] * (X - V)
+    moving = w > 0
+    Y = T
+    if mu > 0:
+        Y = tangential_smooth(T, _k.vertex_normals(np.ascontiguousarray(V), F), F, moving,
+                              base=V0, weights=w, mu=mu, topo=topo)
+        Y = np.where(moving[:, None], closest_points_local(V, F, Y), V)
+    level = np.where(moving, 0 if mu > 0 else 1, 2)  # 0: smoothed, 1: T, 2: the solve's V
     while True:
-        Vn = V + w[:, None] * (X - V)
+        Vn = np.where((level == 0)[:, None], Y, np.where((level == 1)[:, None], T, V))
         bad = np.unique(F[np.einsum("ij,ij->i", _k.face_normals(Vn, F), n_old) < 0.0])
-        bad = bad[w[bad] > 0]
+        bad = bad[level[bad] < 2]
         if len(bad) == 0:
-            return Vn, w
-        w[bad] = 0.0  # these vertices keep the solve's position
+            return Vn, np.where(level < 2, w, 0.0)
+        level[bad] += 1  # these vertices fall back one level
 
 
 def residual_tangential_ratio(V: np.ndarray, V0: np.ndarray, F: np.ndarray) -> float:
