@@ -155,10 +155,17 @@ def test_polish_flattens_a_noisy_fold_and_keeps_its_crease():
     assert np.allclose(Xr, X @ R.T, atol=1e-9)
 
 
-def test_polish_heavy_rule():
-    """Heavy noise (> 0.33) on a CAD part (w_out > 1) only."""
-    f = denoise_mod.polish_heavy
-    assert f(0.42, 6.0) and not f(0.33, 6.0) and not f(0.42, 1.0) and not f(0.27, 6.0)
+def test_polish_rule():
+    """Heavy noise (> 0.33) on a CAD part (w_out > 1), or correlated noise (w > 1) with its
+    length: r = round(4 max(1, ℓ)), τ = 5° max(1, ℓ), passes = round(5 max(1, ℓ²))."""
+    f = denoise_mod.polish_rule
+    assert f(0.42, 6.0, 1.0, 0.0) == (4, 5.0, 5)
+    assert f(0.33, 6.0, 1.0, 0.0) is None and f(0.42, 1.0, 1.0, 0.0) is None
+    assert f(0.27, 6.0, 1.0, 0.0) is None
+    r, tau, n = f(0.16, 1.0, 16.0, np.sqrt(2.0))
+    assert (r, n) == (6, 10) and abs(tau - 5 * np.sqrt(2.0)) < 1e-12
+    assert f(0.16, 1.0, 16.0, 0.5) == (4, 5.0, 5)
+    assert f(0.42, 6.0, 1.0, float("nan")) == (4, 5.0, 5)
 
 
 @pytest.mark.shared

@@ -24,9 +24,9 @@ recorded in ``DenoiseResult.params``):
    ≥ 6 edges) with ``a = 10``, and the flat-TV class (:mod:`meshrepair.priors`, MC ``a = 0.5``)
    on C's flat edges; edge-Willmore elsewhere, with weight ``6 w`` outside C on CAD parts
    (:func:`outside_weight`); ``β1 = 1.2 a``, ``β2 ≈ 1.67 β1``; ≤ 60 iterations or rule (35).
-4. *Polish* (heavy noise on CAD parts, :func:`polish_heavy`): a bilateral normal filter bounded
-   by the converged M_E on the flat patches, then the vertices to the filtered normals
-   (:mod:`meshrepair.polish`).
+4. *Polish* (heavy noise on CAD parts, correlated noise; :func:`polish_rule`): a bilateral
+   normal filter bounded by the converged M_E on the flat patches, at the noise's scale, then
+   the vertices to the filtered normals (:mod:`meshrepair.polish`).
 
 Throughout: λ = ``clip(0.02 / γ̂², 0.05, 1)``; the Willmore weight ``w`` from ρ for correlated
 noise along the normals (:func:`willmore_weight_from_scale`) and then ``3 max(1, ℓ²)`` V-steps
@@ -366,19 +366,33 @@ POLISH = True
 """Heavy noise on a CAD part gets the crease-bounded polish of :mod:`meshrepair.polish`."""
 
 
-def polish_heavy(gamma: float, outside: float) -> bool:
-    """Whether the result is polished (:mod:`meshrepair.polish`):
+def polish_rule(gamma: float, outside: float, willmore: float, length: float
+                ) -> tuple[int, float, int] | None:
+    """Whether the result is polished (:mod:`meshrepair.polish`) and with which ring count
+    ``r``, flatness threshold ``τ`` (degrees) and number of passes:
 
-    .. math:: \\max(γ̂, γ̂_{rms}) > 0.33 \\text{ and } w_{out} > 1,
+    .. math:: \\text{polish} \\iff (\\max(γ̂, γ̂_{rms}) > 0.33 \\wedge w_{out} > 1)
+              \\vee w > 1, \\qquad
+              r = \\mathrm{round}(4 \\max(1, ℓ)),\\; τ = 5° \\max(1, ℓ),\\;
+              n_{pass} = \\mathrm{round}(5 \\max(1, ℓ^2)),
 
     heavy noise (:data:`HEAVY_NOISE`) on a CAD part with the noise along the normals (the
-    rule of :func:`outside_weight`). At moderate noise the feature stage already leaves the flat
-    patches within 2° (tgv_fandisk); on organic meshes, random-direction or correlated noise
-    there is no converged crease mask to bound the filter. Measured in docs/parameters.md
-    (round 5): gcn_fandisk_n6 MSAE 58.7 → 52, fandisk γ0.7 124 → 115; the same filter on
-    gcn_trim_star_n3 (γ̂ 0.27, not heavy): 75 → 129 without the flatness gate.
+    rule of :func:`outside_weight`), or noise found correlated along the normals (``w > 1``,
+    :func:`willmore_weight_from_scale`), with ``ℓ`` its correlation length (0 for white
+    noise). A bump ``ℓ`` edges wide is averaged by a neighbourhood ``ℓ`` times wider; its
+    residual slopes are larger (hence τ), and the filter-and-move passes diffuse, like the
+    V-steps of :func:`inner_iters_from_scale`, over about ``ℓ²`` times as many passes.
+    At moderate white noise the feature stage already leaves the flat patches within 2°
+    (tgv_fandisk) and the same filter on gcn_trim_star_n3 (γ̂ 0.27) without the gate measured
+    75 → 129; organic meshes and random-direction noise have no converged crease mask to
+    bound it. Measured in docs/parameters.md (round 5): gcn_fandisk_n6 MSAE 58.7 → 52.1,
+    fandisk γ0.7 124.3 → 118.3; the Kinect scan 167.6 → 156 (ℓ = √2: r = 6, τ = 7.1°, 10).
     """
-    return POLISH and gamma > HEAVY_NOISE and outside > 1.0
+    heavy = gamma > HEAVY_NOISE and outside > 1.0
+    if not POLISH or not (heavy or willmore > 1.0):
+        return None
+    ell = max(1.0, float(length)) if willmore > 1.0 and np.isfinite(length) else 1.0
+    return int(round(4 * ell)), 5.0 * ell, int(round(5 * ell * ell))
 
 
 def inner_iters_from_scale(length: float, base: int = 3) -> int:
@@ -673,11 +687,14 @@ def _denoise(V, F, *, lam, th, a, robust_iters, feature_iters, mask_update_every
                 f"input's even without the robust stage ({len(V)} vertices; a mesh this coarse "
                 "has no smooth regions for the model); it cannot be denoised")
     info["polished"] = 0.0
-    if polish_heavy(max(gamma, gamma_rms), info["outside_weight"]):
+    pr = polish_rule(max(gamma, gamma_rms), info["outside_weight"], ww, info["noise_length"])
+    if pr is not None:
         from .polish import polish
 
-        V_out, info["polished"] = polish(V_out, F, M_E, topo)
-        log.info("heavy-noise polish on %.1f %% of the faces", 100 * info["polished"])
+        V_out, info["polished"] = polish(V_out, F, M_E, topo, rings=pr[0], tau=pr[1],
+                                         passes=pr[2])
+        log.info("polish (%d rings, %.1f deg, %d passes) on %.1f %% of the faces", *pr,
+                 100 * info["polished"])
     n_res_folded = 0
     if unfold and UNFOLD_RESULT:
         V_out, n_res_folded = unfold_result(V_out, topo, r1_V)
