@@ -93,38 +93,22 @@ def flat_gate(N: np.ndarray, I: np.ndarray, J: np.ndarray, tau: float) -> np.nda
     return s < tau
 
 
-def filter_normals(X: np.ndarray, F: np.ndarray, I: np.ndarray, J: np.ndarray, gate: np.ndarray,
-                   *, sigma_c: float, sigma_s: float = POLISH_SIGMA_S,
-                   K: sp.csr_matrix | None = None) -> np.ndarray:
-    """One bilateral pass ``n'`` of the module docstring (faces outside ``gate`` unchanged).
-    ``K``: the CSR pattern whose entries are the pairs ``(I, J)`` in order (faster sums)."""
+def filter_normals(X: np.ndarray, F: np.ndarray, K: sp.csr_matrix, gate: np.ndarray, *,
+                   sigma_c: float, sigma_s: float = POLISH_SIGMA_S) -> np.ndarray:
+    """One bilateral pass ``n'`` of the module docstring over the neighbourhood ``K`` (CSR,
+    from :func:`_neighbourhood_csr`); faces outside ``gate`` keep their normals."""
+    from ._kernels.bilateral import bilateral_pass
+
     N, area, C = _normals_areas(X, F)
-    d2 = np.einsum("ij,ij->i", C[I] - C[J], C[I] - C[J])
-    nd2 = np.einsum("ij,ij->i", N[I] - N[J], N[I] - N[J])
-    w = area[J] * np.exp(-d2 / (2 * sigma_c**2) - nd2 / (2 * sigma_s**2))
-    if K is None:
-        Nn = _scatter(I, w, N[J], len(F))
-    else:
-        Nn = sp.csr_matrix((w, K.indices, K.indptr), shape=K.shape) @ N
-    Nn /= np.maximum(np.linalg.norm(Nn, axis=1, keepdims=True), 1e-300)
-    Nn[~gate] = N[~gate]
-    return Nn
+    return bilateral_pass(K.indptr, K.indices, N, area, C, gate, sigma_c, sigma_s)
 
 
 def vertex_update(X: np.ndarray, F: np.ndarray, Nt: np.ndarray, steps: int = POLISH_VSTEPS
                   ) -> np.ndarray:
     """Sun et al. steps towards face normals ``Nt`` (module docstring); returns a new array."""
-    X = np.array(X, dtype=np.float64, copy=True)
-    nV, nF = len(X), len(F)
-    deg = np.maximum(np.bincount(F.ravel(), minlength=nV), 1).astype(np.float64)
-    corners = F.T.ravel()  # corner j of face f at j * nF + f
-    P = sp.csr_matrix((1.0 / deg[corners], (corners, np.arange(3 * nF))), shape=(nV, 3 * nF))
-    N3 = np.tile(Nt, (3, 1))
-    for _ in range(steps):
-        C = X[F].mean(axis=1)
-        s = np.einsum("ij,ij->i", np.tile(C, (3, 1)) - X[corners], N3)
-        X += P @ (s[:, None] * N3)
-    return X
+    from ._kernels.bilateral import sun_steps
+
+    return sun_steps(X, F, Nt, steps)
 
 
 def polish(V: np.ndarray, F: np.ndarray, sharp: np.ndarray, topo, *, rings: int = POLISH_RINGS,
@@ -155,6 +139,6 @@ def polish(V: np.ndarray, F: np.ndarray, sharp: np.ndarray, topo, *, rings: int 
     if not gate.any():
         return X, 0.0
     for _ in range(passes):
-        Nt = filter_normals(X, F, I, J, gate, sigma_c=rings * le, K=K)
+        Nt = filter_normals(X, F, K, gate, sigma_c=rings * le)
         X = vertex_update(X, F, Nt)
     return X, float(gate.mean())
