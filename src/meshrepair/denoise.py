@@ -374,7 +374,7 @@ def polish_rule(gamma: float, outside: float, willmore: float, length: float
     .. math:: \\text{polish} \\iff (\\max(γ̂, γ̂_{rms}) > 0.33 \\wedge w_{out} > 1)
               \\vee w > 1, \\qquad
               r = \\mathrm{round}(4 \\max(1, ℓ)),\\; τ = 5° \\max(1, ℓ),\\;
-              n_{pass} = \\mathrm{round}(5 \\max(1, ℓ^2)),
+              n_{pass} = \\mathrm{round}(10 \\max(1, ℓ^2)),
 
     heavy noise (:data:`HEAVY_NOISE`) on a CAD part with the noise along the normals (the
     rule of :func:`outside_weight`), or noise found correlated along the normals (``w > 1``,
@@ -385,14 +385,15 @@ def polish_rule(gamma: float, outside: float, willmore: float, length: float
     At moderate white noise the feature stage already leaves the flat patches within 2°
     (tgv_fandisk) and the same filter on gcn_trim_star_n3 (γ̂ 0.27) without the gate measured
     75 → 129; organic meshes and random-direction noise have no converged crease mask to
-    bound it. Measured in docs/parameters.md (round 5): gcn_fandisk_n6 MSAE 58.7 → 52.1,
-    fandisk γ0.7 124.3 → 118.3; the Kinect scan 167.6 → 156 (ℓ = √2: r = 6, τ = 7.1°, 10).
+    bound it. Measured in docs/parameters.md (round 5): gcn_fandisk_n6 MSAE 58.7 → 51.5,
+    fandisk γ0.7 124.3 → 113.4; the Kinect scan 167.6 → 155.0 (ℓ = √2: r = 6, τ = 7.1°, 20
+    passes).
     """
     heavy = gamma > HEAVY_NOISE and outside > 1.0
     if not POLISH or not (heavy or willmore > 1.0):
         return None
     ell = max(1.0, float(length)) if willmore > 1.0 and np.isfinite(length) else 1.0
-    return int(round(4 * ell)), 5.0 * ell, int(round(5 * ell * ell))
+    return int(round(4 * ell)), 5.0 * ell, int(round(10 * ell * ell))
 
 
 def inner_iters_from_scale(length: float, base: int = 3) -> int:

@@ -31,7 +31,8 @@ filtered normals as ``N``), each ``x_i ← x_i + (1/|F_i|) Σ_{f ∋ i} n'_f (n'
 20 per filter pass, ``passes`` passes. A mesh whose faces already have the normals ``n'`` is a
 fixed point (``c_f − x_i`` lies in the face's plane).
 
-Defaults: ``r = 4``, ``τ = 5°``, ``passes = 5``; measured in docs/parameters.md (round 5).
+Defaults: ``r = 4``, ``τ = 5°``, ``passes = 10`` (:func:`meshrepair.denoise.polish_rule`
+scales them with the noise's correlation length); measured in docs/parameters.md (round 5).
 """
 
 from __future__ import annotations
@@ -42,7 +43,7 @@ import scipy.sparse as sp
 POLISH_RINGS = 4
 POLISH_TAU = 5.0
 POLISH_SIGMA_S = 0.35
-POLISH_PASSES = 5
+POLISH_PASSES = 10
 POLISH_VSTEPS = 20
 
 
