@@ -1,0 +1,282 @@
+"""Tangential re-anchoring: the tangential part of the fidelity solved exactly after the solve.
+
+The V-update (26) fits the face normals of V to the ADMM normals N. Face normals do not change,
+to first order, when a vertex slides in its tangent plane, so the only force on the tangential
+position of a vertex is the fidelity ``λ/2 ||V_i - V⁰_i||²`` with a small λ where the noise is
+strong: the result *surface* S is right but its vertices drift along it (measured on nllr_igea:
+0.155 mean edge lengths of tangential error against 0.016 in the input and 0.051 for NLLR; the
+normal error is the same, docs/parameters.md).
+
+Post-step. With the result surface S = S(V) held fixed (its shape is what the prior and the
+normal fidelity decided), the fidelity restricted to S is minimised vertex by vertex:
+
+.. math:: V_i^{new} = \\operatorname{argmin}_{p \\in S} \\tfrac12 \\|p - V^0_i\\|^2
+          = \\pi_S(V^0_i),
+
+the closest point of the data vertex on the result surface (the Huber fidelity of
+:mod:`meshrepair.fidelity` has the same minimiser: it is increasing in ``||p - V⁰_i||``). On a
+plane it is the orthogonal projection ``V⁰_i - ⟨V⁰_i - q, n⟩ n``; on a sphere of centre c and
+radius r it is ``c + r (V⁰_i - c)/||V⁰_i - c||`` (tested). Only the tangential position of each
+vertex changes, by at most its drift, so the shape of S is kept up to the resampling of a
+piecewise-linear surface at new points.
+
+Weights (a minimum-variance blend). The projection is not exact either: the data vertex sits
+``d_i = ⟨V⁰_i - V_i, n_i⟩`` off S along the normal, and an angular error of S's normals tilts
+its foot by about ``κ |d_i|``, jitter from vertex to vertex, to which the face normals (MSAE)
+are very sensitive (0.05 mean edge lengths of random tangential jitter on the oracle positions:
+nicolo 68 → 84). The solve's own position has error variance ``σ²`` (its drift, estimated by
+the mean squared shift ``||π_S(V⁰_i) - V_i||²`` over the vertices treated), the projection
+``κ² d_i²``; the blend of two independent estimates with the least variance is
+
+.. math:: V_i^{new} = V_i + w_i (\\pi_S(V^0_i) - V_i), \\qquad
+          w_i = \\frac{σ^2}{σ^2 + κ^2 d_i^2},
+
+``κ = REANCHOR_KAPPA = 0.3`` (chosen on the design set, docs/parameters.md). Far-thrown impulses
+(large ``|d_i|``) keep the solve's position.
+
+When (:func:`residual_tangential_ratio`). The data's tangential positions are only worth
+pulling towards when the noise lay along the normals. After the solve this shows in the residual
+``r = V⁰ - V`` split along the result's vertex normals:
+
+.. math:: ρ_t = \\sqrt{\\frac{\\sum_i \\|P_i r_i\\|^2}{\\sum_i ⟨r_i, n_i⟩^2}},
+
+0.13-0.56 on every normal-direction and impulsive input of the shared set, 0.78-1.45 on
+random-direction noise (measured in docs/parameters.md); the step runs when ρ_t < 0.6.
+
+The search is local: a data vertex is near its result vertex (drift of a fraction of an edge),
+so the candidates are the faces of the ``rings``-ring of the result vertex i and of the result
+vertex nearest to ``V⁰_i``; every candidate triangle gets the exact point-triangle closest
+point (Ericson, *Real-Time Collision Detection*, 5.1.5).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import scipy.sparse as sp
+from scipy.spatial import cKDTree
+
+from .topology import Topology
+
+
+def closest_point_triangles(P: np.ndarray, A: np.ndarray, B: np.ndarray, C: np.ndarray
+                            ) -> np.ndarray:
+    """Closest point of each ``P[k]`` on the triangle ``(A[k], B[k], C[k])``.
+
+    Parameters
+    ----------
+    P, A, B, C : (n, 3) float64
+
+    Returns
+    -------
+    (n, 3) float64
+    """
+    ab, ac, ap = B - A, C - A, P - A
+    d1, d2 = np.einsum("ij,ij->i", ab, ap), np.einsum("ij,ij->i", ac, ap)
+    bp = P - B
+    d3, d4 = np.einsum("ij,ij->i", ab, bp), np.einsum("ij,ij->i", ac, bp)
+    cp = P - C
+    d5, d6 = np.einsum("ij,ij->i", ab, cp), np.einsum("ij,ij->i", ac, cp)
+    va = d3 * d6 - d5 * d4
+    vb = d5 * d2 - d1 * d6
+    vc = d1 * d4 - d3 * d2
+    tiny = 1e-300
+    # interior (default), then the edge and vertex regions overwrite it in reverse priority
+    den = np.maximum(va + vb + vc, tiny)
+    v, w = vb / den, vc / den
+    out = A + v[:, None] * ab + w[:, None] * ac
+    # edge BC
+    m = (va <= 0) & (d4 - d3 >= 0) & (d5 - d6 >= 0)
+    s = (d4 - d3) / np.maximum((d4 - d3) + (d5 - d6), tiny)
+    out[m] = B[m] + s[m, None] * (C - B)[m]
+    # edge AC
+    m = (vb <= 0) & (d2 >= 0) & (d6 <= 0)
+    s = d2 / np.maximum(d2 - d6, tiny)
+    out[m] = A[m] + s[m, None] * ac[m]
+    # edge AB
+    m = (vc <= 0) & (d1 >= 0) & (d3 <= 0)
+    s = d1 / np.maximum(d1 - d3, tiny)
+    out[m] = A[m] + s[m, None] * ab[m]
+    # vertices
+    m = (d6 >= 0) & (d5 <= d6)
+    out[m] = C[m]
+    m = (d3 >= 0) & (d4 <= d3)
+    out[m] = B[m]
+    m = (d1 <= 0) & (d2 <= 0)
+    out[m] = A[m]
+    return out
+
+
+def _vertex_faces(F: np.ndarray, n_vertices: int) -> sp.csr_matrix:
+    nF = len(F)
+    return sp.csr_matrix((np.ones(3 * nF, dtype=np.int8),
+                          (F.ravel(), np.repeat(np.arange(nF), 3))), shape=(n_vertices, nF))
+
+
+def closest_points_local(V: np.ndarray, F: np.ndarray, P: np.ndarray, *,
+                         rings: int = 1, chunk: int = 200_000) -> np.ndarray:
+    """Closest point of each ``P[i]`` on the mesh ``(V, F)`` among the faces near vertex i.
+
+    Candidates of ``P[i]``: the faces of the ``rings``-ring of vertex i and of the vertex of V
+    nearest to ``P[i]``. Exact when the true closest face is among them (``P[i]`` within about
+    an edge of vertex i).
+
+    Parameters
+    ----------
+    V : (nV, 3) float64, the surface
+    F : (nF, 3) int64
+    P : (nV, 3) float64, one query point per vertex
+    rings : vertex rings of the candidate faces (≥ 1)
+    chunk : vertices per batch (memory bound)
+
+    Returns
+    -------
+    (nV, 3) float64
+    """
+    V = np.asarray(V, dtype=np.float64)
+    P = np.asarray(P, dtype=np.float64)
+    F = np.asarray(F, dtype=np.int64)
+    nV = len(V)
+    VF = _vertex_faces(F, nV)
+    if rings > 1:
+        A = (VF @ VF.T).astype(bool).astype(np.int8)
+        R = sp.identity(nV, dtype=np.int8, format="csr")
+        for _ in range(rings - 1):
+            R = ((R @ A) > 0).astype(np.int8)
+        VF = ((R @ VF) > 0).astype(np.int8).tocsr()
+    near = cKDTree(V).query(P)[1]
+    out = P.copy()
+    for s in range(0, nV, chunk):
+        idx = np.arange(s, min(nV, s + chunk))
+        C1 = VF[idx]
+        C2 = VF[near[idx]]
+        Cm = (C1 + C2).tocsr()  # candidate faces per row, rows in order
+        counts = np.diff(Cm.indptr)
+        f = Cm.indices.astype(np.int64)
+        if len(f) == 0:
+            continue
+        q = np.repeat(np.arange(len(idx)), counts)
+        gi = idx[q]
+        X = closest_point_triangles(P[gi], V[F[f, 0]], V[F[f, 1]], V[F[f, 2]])
+        R = X - P[gi]
+        d = np.einsum("ij,ij->i", R, R)
+        rows = np.flatnonzero(counts)
+        dmin = np.minimum.reduceat(d, Cm.indptr[rows])
+        full = np.empty(len(idx))
+        full[rows] = dmin
+        hit = np.flatnonzero(d == full[q])
+        first = np.r_[True, q[hit][1:] != q[hit][:-1]]  # q is sorted: first minimiser per row
+        sel = hit[first]
+        out[idx[q[sel]]] = X[sel]
+    has = np.asarray(VF.sum(axis=1)).ravel() > 0
+    out[~has] = V[~has]  # isolated vertices have no surface to project on
+    return out
+
+
+REANCHOR_KAPPA = 0.3
+"""``κ`` of the blend weights (module docstring)."""
+
+
+def reanchor(V: np.ndarray, V0: np.ndarray, F: np.ndarray, active: np.ndarray | None = None,
+             *, kappa: float = REANCHOR_KAPPA, topo: Topology | None = None
+             ) -> tuple[np.ndarray, np.ndarray]:
+    """The result with its vertices moved along the result surface towards the data's closest
+    points: ``V_i + w_i (π_S(V⁰_i) - V_i)`` (see the module docstring).
+
+    Parameters
+    ----------
+    V : (nV, 3) float64, the solve's result (the surface S)
+    V0 : (nV, 3) float64, the fidelity data
+    F : (nF, 3) int64
+    active : (nV,) bool, the vertices to move (default all); boundary vertices of open meshes
+        never move (their closest point can leave the border)
+    kappa : ``κ`` of :func:`blend_weights` (0: the exact projection, ``w = 1``)
+    topo : Topology, optional (built when omitted)
+
+    Returns
+    -------
+    V_new : (nV, 3) float64, a new array
+    w : (nV,) float64, the weights used
+
+    Notes
+    -----
+    The step slides vertices along S and must not turn a triangle over: the vertices of every
+    face whose normal the step would reverse (``⟨n_f(V_new), n_f(V)⟩ < 0``) keep the solve's
+    position, repeated until no face is reversed (the set of moving vertices shrinks each time,
+    so this ends). Without it spot γ0.4 normal had 6 faces turned over (errors 35-41° →
+    107-177°). A test on *local* folds instead (:func:`meshrepair.relax.locally_flipped_faces`)
+    is wrong here: the igea truth has 74 locally folded faces, and the step restores 37 of them
+    (their error 106° → 67°).
+    """
+    V = np.asarray(V, dtype=np.float64)
+    V0 = np.asarray(V0, dtype=np.float64)
+    F = np.asarray(F, dtype=np.int64)
+    act = np.ones(len(V), bool) if active is None else np.asarray(active, bool).copy()
+    if topo is None:
+        from .topology import edge_topology
+
+        topo = edge_topology(F, len(V))
+    if (~topo.interior).any():
+        act[topo.edges[~topo.interior].ravel()] = False
+    if not act.any():
+        return V.copy(), np.zeros(len(V))
+    X = closest_points_local(V, F, V0)
+    w = (np.where(act, 1.0, 0.0) if kappa == 0
+         else blend_weights(V, V0, X, F, act, kappa))
+    from . import _kernels as _k
+
+    n_old = _k.face_normals(np.ascontiguousarray(V), F)
+    while True:
+        Vn = V + w[:, None] * (X - V)
+        bad = np.unique(F[np.einsum("ij,ij->i", _k.face_normals(Vn, F), n_old) < 0.0])
+        bad = bad[w[bad] > 0]
+        if len(bad) == 0:
+            return Vn, w
+        w[bad] = 0.0  # these vertices keep the solve's position
+
+
+def residual_tangential_ratio(V: np.ndarray, V0: np.ndarray, F: np.ndarray) -> float:
+    """``ρ_t`` of the module docstring: rms tangential over rms normal part of ``V⁰ - V``
+    along the vertex normals of ``V`` (0 when ``V⁰ = V``)."""
+    from . import _kernels as _k
+
+    V = np.ascontiguousarray(V, dtype=np.float64)
+    n = _k.vertex_normals(V, np.asarray(F, dtype=np.int64))
+    r = np.asarray(V0, dtype=np.float64) - V
+    rn = np.einsum("ij,ij->i", r, n)
+    rt = r - rn[:, None] * n
+    den = float(np.einsum("i,i->", rn, rn))
+    num = float(np.einsum("ij,ij->", rt, rt))
+    if not den > 0:
+        return 0.0 if num == 0 else float("inf")
+    return float(np.sqrt(num / den))
+
+
+def blend_weights(V: np.ndarray, V0: np.ndarray, X: np.ndarray, F: np.ndarray,
+                  active: np.ndarray, kappa: float) -> np.ndarray:
+    """``w_i = σ² / (σ² + κ² d_i²)`` on ``active`` vertices (0 elsewhere), with
+    ``d_i = ⟨V⁰_i - V_i, n_i⟩`` and ``σ² = mean_active ||X_i - V_i||²`` (module docstring).
+
+    Parameters
+    ----------
+    V : (nV, 3) the result, V0 : (nV, 3) the data, X : (nV, 3) ``π_S(V⁰)``
+    F : (nF, 3) int64
+    active : (nV,) bool
+    kappa : float >= 0 (0 gives weight 1)
+
+    Returns
+    -------
+    (nV,) float64 in [0, 1]
+    """
+    from . import _kernels as _k
+
+    active = np.asarray(active, bool)
+    w = np.zeros(len(V))
+    if not active.any():
+        return w
+    V = np.ascontiguousarray(V, dtype=np.float64)
+    n = _k.vertex_normals(V, np.asarray(F, dtype=np.int64))
+    d = np.einsum("ij,ij->i", np.asarray(V0) - V, n)
+    s2 = float(np.einsum("ij,ij->i", X - V, X - V)[active].mean())
+    den = s2 + (kappa * d[active]) ** 2
+    w[active] = np.where(den > 0, s2 / np.where(den > 0, den, 1.0), 0.0)
+    return w
