@@ -135,6 +135,27 @@ def test_kernels_match_numpy_twins():
                            kb._np_sun_steps(V, F, N[::-1].copy(), 4), atol=1e-12)
     out = kb.bilateral_pass(*args)
     assert np.allclose(out[~gate], N[~gate])
+    # the row-wise spread equals the pairwise reference flat_gate
+    s = kb.spread_rows(K.indptr, K.indices, N)
+    I, J = _neighbourhood(topo, _crease_mask(V, F, topo), 3)
+    for tau in (2.0, 5.0, 20.0):
+        assert np.array_equal(s < tau, flat_gate(N, I, J, tau))
+    if kb.HAVE_NUMBA:
+        assert np.allclose(kb._nb_spread_rows(K.indptr, K.indices, N),
+                           kb._np_spread_rows(K.indptr, K.indices, N), atol=1e-9)
+
+
+def test_neighbourhood_chunks(monkeypatch):
+    """Building K in chunks of rows gives the same matrix as in one piece."""
+    pm = importlib.import_module("meshrepair.polish")
+    V, F = _fold(12)
+    topo = edge_topology(F, len(V))
+    sharp = _crease_mask(V, F, topo)
+    K1 = _neighbourhood_csr(topo, sharp, 3)
+    monkeypatch.setattr(pm, "NEIGHBOURHOOD_CHUNK", 7)
+    K2 = _neighbourhood_csr(topo, sharp, 3)
+    assert np.array_equal(K1.indptr, K2.indptr) and np.array_equal(K1.indices, K2.indices)
+    assert K1.indices.dtype == np.int32
 
 
 def test_vertex_update_fixed_point_and_descent():

@@ -55,17 +55,32 @@ def _neighbourhood(topo, sharp: np.ndarray, rings: int) -> tuple[np.ndarray, np.
     return I, K.indices.astype(np.int64)
 
 
+NEIGHBOURHOOD_CHUNK = 100_000
+"""Rows of ``K`` built at a time: the sparse products then stay small on million-face meshes
+(``K`` itself is kept with int32 column indices and boolean entries, ≈ 5 bytes per pair; about
+30 pairs per face at r = 4, 60 at r = 6)."""
+
+
 def _neighbourhood_csr(topo, sharp: np.ndarray, rings: int) -> sp.csr_matrix:
+    """``K = (I + A)^r > 0`` as a boolean CSR matrix with sorted rows (module docstring)."""
     nF = topo.n_faces
     ok = topo.interior & ~np.asarray(sharp, bool)
     fa, fb = topo.edge_faces[ok, 0], topo.edge_faces[ok, 1]
     A = sp.csr_matrix((np.ones(2 * len(fa)), (np.r_[fa, fb], np.r_[fb, fa])), shape=(nF, nF))
-    K = sp.identity(nF, format="csr")
-    for _ in range(rings):
-        K = K + K @ A
-        K.data[:] = 1.0
-    K.sort_indices()
-    return K
+    counts, cols = [], []
+    for lo in range(0, nF, NEIGHBOURHOOD_CHUNK):
+        hi = min(nF, lo + NEIGHBOURHOOD_CHUNK)
+        R = sp.csr_matrix((np.ones(hi - lo), (np.arange(hi - lo), np.arange(lo, hi))),
+                          shape=(hi - lo, nF))
+        for _ in range(rings):
+            R = R + R @ A
+            R.data[:] = 1.0
+        R.sort_indices()
+        counts.append(np.diff(R.indptr))
+        cols.append(R.indices.astype(np.int32))
+    indptr = np.r_[0, np.cumsum(np.concatenate(counts))].astype(np.int64)
+    indices = np.concatenate(cols)
+    return sp.csr_matrix((np.ones(len(indices), bool), indices, indptr), shape=(nF, nF))
 
 
 def _normals_areas(X: np.ndarray, F: np.ndarray):
@@ -84,7 +99,7 @@ def _scatter(I: np.ndarray, w: np.ndarray, X: np.ndarray, n: int) -> np.ndarray:
 
 def flat_gate(N: np.ndarray, I: np.ndarray, J: np.ndarray, tau: float) -> np.ndarray:
     """``s_f < τ`` (degrees) of the module docstring, for normals ``N (nF, 3)`` and pairs
-    ``(I, J)`` of ``K``."""
+    ``(I, J)`` of ``K`` (the numpy reference of :func:`flat_gate_csr`)."""
     nF = len(N)
     M = _scatter(I, np.ones(len(I)), N[J], nF)
     M /= np.maximum(np.linalg.norm(M, axis=1, keepdims=True), 1e-300)
@@ -92,6 +107,13 @@ def flat_gate(N: np.ndarray, I: np.ndarray, J: np.ndarray, tau: float) -> np.nda
     cnt = np.bincount(I, minlength=nF)
     s = np.degrees(np.sqrt(np.bincount(I, weights=dev, minlength=nF) / np.maximum(cnt, 1)))
     return s < tau
+
+
+def flat_gate_csr(N: np.ndarray, K: sp.csr_matrix, tau: float) -> np.ndarray:
+    """:func:`flat_gate` row by row over the CSR neighbourhood ``K`` (no per-pair arrays)."""
+    from ._kernels.bilateral import spread_rows
+
+    return spread_rows(K.indptr, K.indices, N) < tau
 
 
 def filter_normals(X: np.ndarray, F: np.ndarray, K: sp.csr_matrix, gate: np.ndarray, *,
@@ -131,10 +153,8 @@ def polish(V: np.ndarray, F: np.ndarray, sharp: np.ndarray, topo, *, rings: int 
     """
     F = np.asarray(F, dtype=np.int64)
     K = _neighbourhood_csr(topo, sharp, rings)
-    I = np.repeat(np.arange(K.shape[0], dtype=np.int64), np.diff(K.indptr))
-    J = K.indices.astype(np.int64)
     N0, _, _ = _normals_areas(V, F)
-    gate = flat_gate(N0, I, J, tau)
+    gate = flat_gate_csr(N0, K, tau)
     le = float(np.linalg.norm(V[topo.edges[:, 0]] - V[topo.edges[:, 1]], axis=1).mean())
     X = np.array(V, dtype=np.float64, copy=True)
     if not gate.any():

@@ -28,6 +28,19 @@ def _np_bilateral(indptr, indices, N, area, C, gate, sigma_c, sigma_s):
     return out
 
 
+def _np_spread_rows(indptr, indices, N):
+    nF = len(N)
+    I = np.repeat(np.arange(nF, dtype=np.int64), np.diff(indptr))
+    J = indices
+    M = np.empty((nF, 3))
+    for k in range(3):
+        M[:, k] = np.bincount(I, weights=N[J, k], minlength=nF)
+    M /= np.maximum(np.linalg.norm(M, axis=1, keepdims=True), 1e-300)
+    dev = np.arccos(np.clip(np.einsum("ij,ij->i", N[J], M[I]), -1.0, 1.0)) ** 2
+    cnt = np.maximum(np.diff(indptr), 1)
+    return np.degrees(np.sqrt(np.bincount(I, weights=dev, minlength=nF) / cnt))
+
+
 def _np_sun_steps(X, F, Nt, steps):
     X = np.array(X, dtype=np.float64, copy=True)
     nV = len(X)
@@ -78,6 +91,34 @@ if HAVE_NUMBA:
         return out
 
     @njit(cache=True)
+    def _nb_spread_rows(indptr, indices, N):  # pragma: no cover - compiled
+        nF = N.shape[0]
+        out = np.zeros(nF)
+        for f in range(nF):
+            m0 = 0.0
+            m1 = 0.0
+            m2 = 0.0
+            for p in range(indptr[f], indptr[f + 1]):
+                g = indices[p]
+                m0 += N[g, 0]
+                m1 += N[g, 1]
+                m2 += N[g, 2]
+            nrm = max(np.sqrt(m0 * m0 + m1 * m1 + m2 * m2), 1e-300)
+            m0 /= nrm
+            m1 /= nrm
+            m2 /= nrm
+            acc = 0.0
+            for p in range(indptr[f], indptr[f + 1]):
+                g = indices[p]
+                c = N[g, 0] * m0 + N[g, 1] * m1 + N[g, 2] * m2
+                c = min(1.0, max(-1.0, c))
+                a = np.arccos(c)
+                acc += a * a
+            cnt = max(indptr[f + 1] - indptr[f], 1)
+            out[f] = np.degrees(np.sqrt(acc / cnt))
+        return out
+
+    @njit(cache=True)
     def _nb_sun_steps(X, F, Nt, steps):  # pragma: no cover - compiled
         X = X.copy()
         nV = X.shape[0]
@@ -113,11 +154,19 @@ if HAVE_NUMBA:
 
 def bilateral_pass(indptr, indices, N, area, C, gate, sigma_c, sigma_s):
     """``n'`` of :mod:`meshrepair.polish` on the rows of ``gate`` (the others keep ``N``)."""
-    args = (np.ascontiguousarray(indptr, np.int64), np.ascontiguousarray(indices, np.int64),
+    args = (np.ascontiguousarray(indptr, np.int64), np.ascontiguousarray(indices),
             np.ascontiguousarray(N, np.float64), np.ascontiguousarray(area, np.float64),
             np.ascontiguousarray(C, np.float64), np.ascontiguousarray(gate, np.bool_),
             float(sigma_c), float(sigma_s))
     return _nb_bilateral(*args) if HAVE_NUMBA else _np_bilateral(*args)
+
+
+def spread_rows(indptr, indices, N):
+    """Per row f of the CSR neighbourhood, the RMS angle (degrees) of ``N[g]`` to their
+    normalised mean, ``s_f`` of :mod:`meshrepair.polish`."""
+    args = (np.ascontiguousarray(indptr, np.int64), np.ascontiguousarray(indices),
+            np.ascontiguousarray(N, np.float64))
+    return _nb_spread_rows(*args) if HAVE_NUMBA else _np_spread_rows(*args)
 
 
 def sun_steps(X, F, Nt, steps):
