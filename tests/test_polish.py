@@ -261,7 +261,18 @@ def test_box_heavy_noise_polish(monkeypatch):
     Vn = add_noise(V, F, 0.6, seed=3)
     r = denoise(Vn, F)
     assert r.params["polished"] > 0
+    r_off = denoise(Vn, F, polish=False)
     monkeypatch.setattr(denoise_mod, "POLISH", False)
     r0 = denoise(Vn, F)
-    assert r0.params["polished"] == 0
+    assert r0.params["polished"] == 0 and r_off.params["polished"] == 0
+    assert np.array_equal(r_off.V, r0.V)
     assert msae(r.V, V, F) < 0.95 * msae(r0.V, V, F)
+
+
+def test_polish_option_checked():
+    """``polish`` must be a bool (MeshRepairError otherwise, before any work)."""
+    from meshrepair import MeshRepairError
+
+    V, F = _plane(6)
+    with pytest.raises(MeshRepairError, match="polish"):
+        denoise(V, F, polish="yes")

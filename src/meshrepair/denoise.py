@@ -484,6 +484,7 @@ def denoise(
     huber_delta: float | None = None,
     willmore_weight: float | None = None,
     regions: bool = True,
+    polish: bool = True,
     callback: Callable[[dict], None] | None = None,
 ) -> DenoiseResult:
     """Denoise a triangle mesh, keeping sharp features (energy (6) minimised by ADMM).
@@ -518,6 +519,8 @@ def denoise(
         first robust probe, and use the smooth prior only elsewhere; ``False`` runs the MC stages
         on the whole mesh without probe, flat-TV class, anchor, correlated-noise weight or
         tangential re-anchoring (the heavy-noise and impulsive rules still apply).
+    polish : apply the automatic polish rule (:func:`polish_rule`, :mod:`meshrepair.polish`);
+        ``False`` never polishes.
     callback : called with each iteration's history entry; raise
         :class:`meshrepair.solver.StopRequested` to stop early.
 
@@ -540,7 +543,8 @@ def denoise(
                         min_feature_edges=min_feature_edges, tol=tol, unfold=unfold,
                         inner_solver=inner_solver, inner_iters=inner_iters,
                         n_solver=n_solver, stages=stages, huber_delta=huber_delta,
-                        willmore_weight=willmore_weight, regions=regions, callback=callback)
+                        willmore_weight=willmore_weight, regions=regions, polish=polish,
+                        callback=callback)
 
 
 COLLAPSE_VOLUME_RATIO = 0.5
@@ -571,7 +575,7 @@ def _volume_ratio(V: np.ndarray, V_out: np.ndarray, F: np.ndarray, report) -> fl
 
 def _denoise(V, F, *, lam, th, a, robust_iters, feature_iters, mask_update_every,
              min_feature_edges, tol, unfold, inner_solver, inner_iters, n_solver, stages,
-             huber_delta, willmore_weight, regions, callback) -> DenoiseResult:
+             huber_delta, willmore_weight, regions, callback, polish=True) -> DenoiseResult:
     from .options import check_bool, check_int, check_number
     from .validate import _check_mesh
 
@@ -587,6 +591,7 @@ def _denoise(V, F, *, lam, th, a, robust_iters, feature_iters, mask_update_every
     tol = check_number("tol", tol, low=0, low_open=True)
     unfold = check_bool("unfold", unfold)
     regions = check_bool("regions", regions)
+    polish = check_bool("polish", polish)
     huber_delta = check_number("huber_delta", huber_delta, low=0, low_open=True, allow_none=True)
     willmore_weight = check_number("willmore_weight", willmore_weight, low=0, low_open=True,
                                    allow_none=True)
@@ -729,12 +734,14 @@ def _denoise(V, F, *, lam, th, a, robust_iters, feature_iters, mask_update_every
                 f"input's even without the robust stage ({len(V)} vertices; a mesh this coarse "
                 "has no smooth regions for the model); it cannot be denoised")
     info["polished"] = 0.0
-    pr = polish_rule(max(gamma, gamma_rms), info["outside_weight"], ww, info["noise_length"])
-    if pr is not None:
-        from .polish import polish
+    # the rule reads the automatic decisions only (a user-set Willmore weight is not a finding)
+    pr = polish_rule(max(gamma, gamma_rms), info["outside_weight"],
+                     ww if willmore_weight is None else 1.0, info["noise_length"])
+    if polish and pr is not None:
+        from .polish import polish as _polish
 
-        V_out, info["polished"] = polish(V_out, F, M_E, topo, rings=pr[0], tau=pr[1],
-                                         passes=pr[2])
+        V_out, info["polished"] = _polish(V_out, F, M_E, topo, rings=pr[0], tau=pr[1],
+                                          passes=pr[2])
         log.info("polish (%d rings, %.1f deg, %d passes) on %.1f %% of the faces", *pr,
                  100 * info["polished"])
     info.update(reanchor_ratio=float("nan"), reanchored=0, reanchor_shift=0.0)
