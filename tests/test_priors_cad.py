@@ -174,7 +174,8 @@ def test_more_inner_steps_follow_long_waves():
 def test_quality_published_kinect_correlated_steps():
     """tgv_kinect_pyramid (real Kinect scan): the noise is found correlated and gets 6 V-steps
     per iteration; MSAE within 8 % of MeshTGV's and E_a within 1.4× (measured 167.6 vs 162.9,
-    8.34° vs 6.17°; before round 4 184.0 / 9.22°)."""
+    8.34° vs 6.17° in round 4, 153.2 / 6.95° with round 6's polish; before round 4 184.0 /
+    9.22°)."""
     from meshrepair.geometry import face_normals
 
     Vn, F = shared_mesh("published/tgv_kinect_pyramid__noisy.ply")
