@@ -51,11 +51,11 @@ CASES = [
 ]
 
 
-def mean_angle(V, Vt, F) -> float:
-    from meshrepair.geometry import face_normals
+def mean_angle(V, V_ref, F) -> float:
+    """E_a: mean angle (degrees) between corresponding face normals."""
+    from meshrepair.metrics import mean_angle_error
 
-    a, b = face_normals(V, F), face_normals(Vt, F)
-    return float(np.degrees(np.arccos(np.clip(np.einsum("ij,ij->i", a, b), -1, 1))).mean())
+    return mean_angle_error(V, V_ref, F)
 
 
 def load(c):

@@ -46,12 +46,11 @@ def cases() -> list[str]:
     return out
 
 
-def mean_angle(V: np.ndarray, V_ref: np.ndarray, F: np.ndarray) -> float:
+def mean_angle(V, V_ref, F) -> float:
     """E_a: mean angle (degrees) between corresponding face normals."""
-    from meshrepair.geometry import face_normals
+    from meshrepair.metrics import mean_angle_error
 
-    a, b = face_normals(V, F), face_normals(V_ref, F)
-    return float(np.degrees(np.arccos(np.clip(np.einsum("ij,ij->i", a, b), -1, 1))).mean())
+    return mean_angle_error(V, V_ref, F)
 
 
 def run(name: str, repeats: int = 1, kwargs: dict | None = None) -> dict:

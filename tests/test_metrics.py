@@ -34,3 +34,18 @@ def test_distances_sphere_offset():
     V, F = np.asarray(m.vertices), np.asarray(m.faces)
     d = distances(1.01 * V, F, V, F)
     assert d["mean"] == pytest.approx(0.01, rel=0.1) and d["hausdorff"] < 0.012
+
+
+def test_mean_angle_error_of_a_rotated_plane_is_the_rotation_angle():
+    from meshrepair.metrics import mean_angle_error
+
+    from .conftest import grid
+
+    V, F = grid(6)
+    th = np.radians(7.0)
+    R = np.array([[1, 0, 0], [0, np.cos(th), -np.sin(th)], [0, np.sin(th), np.cos(th)]])
+    W = V @ R.T
+    assert mean_angle_error(W, V, F) == pytest.approx(7.0, abs=1e-9)
+    assert mean_angle_error(W, V, F, degrees=False) == pytest.approx(th, abs=1e-12)
+    assert msae(W, V, F) == pytest.approx(49.0, abs=1e-7)
+    assert mean_angle_error(V, V, F) == pytest.approx(0.0, abs=1e-6)

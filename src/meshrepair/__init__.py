@@ -25,7 +25,8 @@ _LAZY = {
     "FillResult": "fill", "fill_holes": "fill", "inpaint": "fill",
     "find_holes": "holes",
     "read_mesh": "io", "write_mesh": "io",
-    "distances": "metrics", "msae": "metrics", "vertex_error": "metrics",
+    "distances": "metrics", "msae": "metrics", "mean_angle_error": "metrics",
+    "vertex_error": "metrics",
     "add_noise": "noise", "estimate_noise": "noise",
 }
 
@@ -77,6 +78,7 @@ __all__ = [
     "distances",
     "estimate_noise",
     "msae",
+    "mean_angle_error",
     "read_mesh",
     "vertex_error",
     "write_mesh",

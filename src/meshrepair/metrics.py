@@ -54,15 +54,39 @@ def msae(V: np.ndarray, V_ref: np.ndarray, F: np.ndarray, *, degrees: bool = Tru
     -------
     float
     """
+    ang = _normal_angles(V, V_ref, F)
+    if degrees:
+        ang = np.degrees(ang)
+    return float(np.mean(ang**2))
+
+
+def mean_angle_error(V: np.ndarray, V_ref: np.ndarray, F: np.ndarray, *,
+                     degrees: bool = True) -> float:
+    """E_a: mean angle between corresponding face normals (what most denoising papers report
+    beside (33)).
+
+    Parameters
+    ----------
+    V, V_ref : (nV, 3) result and ground truth with the same connectivity F
+    F : (nF, 3)
+    degrees : report in degrees (default) or radians
+
+    Returns
+    -------
+    float
+    """
+    ang = _normal_angles(V, V_ref, F)
+    return float(np.mean(np.degrees(ang) if degrees else ang))
+
+
+def _normal_angles(V, V_ref, F) -> np.ndarray:
+    """Angles (radians) between the face normals of ``V`` and ``V_ref`` on ``F``, ``(nF,)``."""
     V, V_ref = _points(V, "V"), _points(V_ref, "V_ref")
     _same_shape(V, V_ref)
     F = _faces(F, len(V), "F")
     a = face_normals(V, F)
     b = face_normals(V_ref, F)
-    ang = np.arccos(np.clip(np.einsum("ij,ij->i", a, b), -1.0, 1.0))
-    if degrees:
-        ang = np.degrees(ang)
-    return float(np.mean(ang**2))
+    return np.arccos(np.clip(np.einsum("ij,ij->i", a, b), -1.0, 1.0))
 
 
 def vertex_error(V: np.ndarray, V_ref: np.ndarray) -> float:

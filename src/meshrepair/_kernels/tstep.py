@@ -34,17 +34,10 @@ def prox_constants(a: float, beta1: float, w: float) -> tuple[float, float, floa
 
 
 def _np_t_from_normals(N, l, fa, fb, rho1, sharp, flat, a, a_flat, beta1, w):
-    from ..penalties import prox_mc
+    from .priors import _np_t_update_mixed
 
-    base = beta1 * _np_grad_edges(N, l, fa, fb) + rho1
-    t = base / (beta1 + 2.0 * w)
-    if sharp.any():
-        t[sharp] = prox_mc(base[sharp] / beta1, a, beta1)
-    if flat is not None:
-        f = np.asarray(flat, bool) & ~sharp
-        if f.any():
-            t[f] = prox_mc(base[f] / beta1, a_flat, beta1)
-    return t
+    return _np_t_update_mixed(_np_grad_edges(N, l, fa, fb), rho1, sharp, flat, a, a_flat, beta1,
+                              w)
 
 
 if HAVE_NUMBA:
