@@ -22,6 +22,7 @@ from meshrepair.topology import edge_topology
 from .conftest import shared_mesh
 
 denoise_mod = importlib.import_module("meshrepair.denoise")
+rules_mod = importlib.import_module("meshrepair.denoise_rules")
 
 
 def _plane(n=14):
@@ -261,7 +262,7 @@ def test_box_heavy_noise_polish(monkeypatch):
     r = denoise(Vn, F)
     assert r.params["polished"] > 0
     r_off = denoise(Vn, F, polish=False)
-    monkeypatch.setattr(denoise_mod, "POLISH", False)
+    monkeypatch.setattr(rules_mod, "POLISH", False)
     r0 = denoise(Vn, F)
     assert r0.params["polished"] == 0 and r_off.params["polished"] == 0
     assert np.array_equal(r_off.V, r0.V)

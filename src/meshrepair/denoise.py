@@ -50,6 +50,38 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from ._memory import heap_allocations
+from .denoise_folds import (  # noqa: F401  (re-exported)
+    COLLAPSE_VOLUME_RATIO,
+    UNFOLD_DATA_IMPULSIVE,
+    UNFOLD_RESULT,
+    _keep_consistent_clusters,
+    _volume_ratio,
+    fidelity_data,
+    unfold_result,
+)
+from .denoise_rules import (  # noqa: F401  (re-exported: the rules read from the input)
+    CAD_SUPPORT,
+    CAD_WILLMORE,
+    FLAT_A,
+    FLAT_SPREAD_DEFAULT,
+    HEAVY_NOISE,
+    HEAVY_ROBUST_A,
+    HEAVY_SLOPE,
+    IMPULSIVE_RATIO,
+    POLISH,
+    PROBE_EARLY_STOP,
+    PROBE_MAX_ITERS,
+    TANGENTIAL_MAX,
+    huber_from_noise,
+    inner_iters_from_scale,
+    is_impulsive,
+    lambda_from_noise,
+    outside_weight,
+    polish_rule,
+    robust_a_from_noise,
+    robust_iters_from_noise,
+    willmore_weight_from_scale,
+)
 from .errors import MeshRepairError
 from .noise import noise_statistics
 from .regions import crease_support, flat_edges
@@ -134,151 +166,6 @@ def _edge_values_to(topo, topo_w, pf: np.ndarray, values: np.ndarray) -> np.ndar
     return out
 
 
-HEAVY_NOISE = 0.33
-HEAVY_SLOPE = 600.0
-"""Above this estimated level the robust stage grows by 600 iterations per unit of γ̂ (up to 120):
-heavy noise is otherwise frozen in by the feature stage (measured in docs/parameters.md)."""
-
-
-HEAVY_ROBUST_A = 0.25
-
-
-def robust_a_from_noise(gamma: float) -> float:
-    """Non-convexity of the robust stage: 0.5, or ``HEAVY_ROBUST_A`` above ``HEAVY_NOISE``."""
-    return HEAVY_ROBUST_A if gamma > HEAVY_NOISE else 0.5
-
-
-def robust_iters_from_noise(gamma: float, folded_fraction: float = 0.0) -> int:
-    """Default length of the robust stage: ``clip(130 γ̂, 10, 40)``, or 40 when more than 1 % of
-    the faces were folded over. ``denoise`` passes the larger of the MAD and RMS noise
-    estimates, so impulsive noise (RMS 1.5× MAD) also gets the long stage.
-
-    Measured (benchmarks in docs/parameters.md): at γ = 0.1 a 10-iteration robust stage halves
-    MSAE against 40 on organic meshes (spot 59 → 41, rocker_arm 72 → 41) and on fandisk (8.4 →
-    5.0); at γ = 0.3 the long stage is needed (fandisk 25 with 40, 49 with 10). Random-direction
-    noise reads about half its level but still wants the long stage; its fold-overs give it away.
-    """
-    if gamma > HEAVY_NOISE:
-        return int(np.clip(round(40 + HEAVY_SLOPE * (gamma - HEAVY_NOISE)), 40, 120))
-    if folded_fraction > 0.01:
-        return 40
-    return int(np.clip(round(130.0 * gamma), 10, 40))
-
-
-def lambda_from_noise(gamma: float) -> float:
-    """Default fidelity weight λ for an estimated noise level γ̂ (mean edge lengths)."""
-    return float(np.clip(0.02 / max(gamma, 1e-3) ** 2, 0.05, 1.0))
-
-
-TANGENTIAL_MAX = 0.65
-"""Below this :func:`meshrepair.scale.tangential_ratio` the noise is taken to lie along the
-normals (measured 0.08-0.47 on normal noise, 0.83-1.29 on random-direction noise) and the
-crease-supported region gets the tangential anchor of
-:func:`meshrepair.fidelity.tangential_anchor`."""
-
-UNFOLD_DATA_IMPULSIVE = True
-"""Where the input had folded faces, the unfolded mesh (:func:`meshrepair.relax.untangle`) is
-the *start* of the solve, and the fidelity term keeps the *input* as its data ``V⁰``, except for
-impulsive noise, where the folds are made by thrown vertices and the unfolded positions are the
-better data. Umbrella unfolding moves every vertex of a folded fan tangentially as well (nllr_igea:
-2,601 of 8,268 vertices, 0.24 mean edge lengths rms), and a fidelity to it held that tangential
-error in: measured in docs/parameters.md (gcn_trim_star_n3 MSAE 117.8 → 72.8, E_V ratio 1.27 →
-0.86; fandisk γ0.7 183 → 151; held-out spot γ0.4 normal 324 → 509 is the one large loss)."""
-
-
-def fidelity_data(V_input: np.ndarray, V_unfolded: np.ndarray, impulsive: bool) -> np.ndarray:
-    """Data ``V⁰`` of the fidelity term: the input, or the unfolded mesh for impulsive noise
-    (see :data:`UNFOLD_DATA_IMPULSIVE`)."""
-    return V_unfolded if (impulsive and UNFOLD_DATA_IMPULSIVE) else V_input
-
-
-UNFOLD_RESULT = True
-"""Faces still folded over in the *result* are unfolded by the same umbrella step as the input,
-cluster by cluster where the unfolded faces agree better with the robust probe's normals
-(:func:`unfold_result`). With the input as data (:func:`fidelity_data`), a fold of the input on
-a coarse mesh can survive both solves: at γ0.4 normal noise spot (2,930 vertices) kept 31 faces
-folded (errors 57-170°), a third of its MSAE. Measured in docs/parameters.md (round 3): spot
-γ0.4 normal 499 → 318, camelhead γ0.3 490 → 294, sharp_sphere 186 → 156, fandisk γ0.7 164 →
-138, gcn_fandisk_n6 82 → 66; trim_star n3 73 → 77 (without the probe check 88: its true spikes,
-whose faces meet at more than 90° in the truth too, were blunted)."""
-
-
-def unfold_result(V_out: np.ndarray, topo, V_ref: np.ndarray | None = None
-                  ) -> tuple[np.ndarray, int]:
-    """The result with its locally folded faces unfolded.
-
-    A face *f* is folded when ``⟨n_f, Σ_g n_g⟩ ≤ 0`` over its edge-neighbours *g*
-    (:func:`meshrepair.relax.locally_flipped_faces`); the vertices of folded faces and their
-    1-ring are moved to their neighbours' centroid until no face is folded
-    (:func:`meshrepair.relax.untangle`, which keeps the iterate with the fewest folds, so a
-    fold it cannot remove leaves the result unchanged). Vertices away from folds do not move.
-
-    With a reference ``V_ref`` (``denoise`` passes the robust probe's result, which has no
-    folds and keeps true spikes), each connected cluster K of moved vertices keeps its unfolded
-    positions only when the faces touching it then agree better with the reference normals:
-
-    .. math:: \\sum_{f \\sim K} \\angle(n_f(V_u), n_f(V_{ref}))
-              < \\sum_{f \\sim K} \\angle(n_f(V_{out}), n_f(V_{ref})),
-
-    so a true spike whose faces meet at more than 90° (trim_star's) is not blunted.
-
-    Parameters
-    ----------
-    V_out : (nV, 3) float64, the solve's result
-    topo : Topology of the mesh
-    V_ref : (nV, 3) float64, optional reference for the per-cluster check
-
-    Returns
-    -------
-    V : (nV, 3) float64, a new array (``V_out`` itself when nothing is folded)
-    n_folded : int, faces folded in ``V_out``
-    """
-    from .relax import locally_flipped_faces
-
-    n = int(locally_flipped_faces(V_out, topo).sum())
-    if n == 0:
-        return V_out, 0
-    V, _ = untangle(V_out, topo)
-    if V_ref is not None:
-        V = _keep_consistent_clusters(V_out, V, V_ref, topo)
-    return V, n
-
-
-def _keep_consistent_clusters(V_out, V_unf, V_ref, topo):
-    """Per connected cluster of moved vertices, keep the unfolded positions only where the
-    faces touching the cluster agree better with the reference normals (see
-    :func:`unfold_result`)."""
-    import scipy.sparse as sp
-    from scipy.sparse.csgraph import connected_components
-
-    from .geometry import face_normals
-
-    F = topo.faces
-    moved = np.any(V_unf != V_out, axis=1)
-    if not moved.any():
-        return V_unf
-    e = topo.edges[moved[topo.edges[:, 0]] & moved[topo.edges[:, 1]]]
-    nV = topo.n_vertices
-    A = sp.coo_matrix((np.ones(len(e)), (e[:, 0], e[:, 1])), shape=(nV, nV))
-    _, lab = connected_components(A, directed=False)
-    lab = np.where(moved, lab, -1)
-    Nr = face_normals(V_ref, F)
-
-    def ang(X):
-        return np.arccos(np.clip(np.einsum("ij,ij->i", face_normals(X, F), Nr), -1.0, 1.0))
-
-    a0, a1 = ang(V_out), ang(V_unf)
-    fl = lab[F].max(axis=1)  # the moved vertices of a face are adjacent: one cluster
-    m = fl >= 0
-    nc = int(lab.max()) + 1
-    d = np.bincount(fl[m], weights=a1[m] - a0[m], minlength=nc)
-    keep = d < 0
-    out = V_out.copy()
-    sel = moved & keep[np.maximum(lab, 0)]
-    out[sel] = V_unf[sel]
-    return out
-
-
 REANCHOR = True
 REANCHOR_MAX_RATIO = 0.6
 """Tangential re-anchoring of the smooth region after the solve (:mod:`meshrepair.reproject`):
@@ -310,144 +197,6 @@ def _reanchor_smooth(V_in, V_out, F, topo, sup_v, gamma, info):
     log.info("re-anchored %d smooth-region vertices tangentially (residual ratio %.2f)",
              info["reanchored"], ratio)
     return V_new
-
-
-PROBE_MAX_ITERS = 120
-PROBE_EARLY_STOP = True
-"""Cap of the robust probe that decides the crease-supported region."""
-
-FLAT_SPREAD_DEFAULT = 7.0
-"""Crease-supported edges whose robust-probe normal spread is below this (degrees) get the
-flat-TV prior (MC with ``a = FLAT_A``) in the feature stage instead of edge-Willmore."""
-FLAT_A = 0.5
-
-IMPULSIVE_RATIO = 1.3
-"""Noise whose RMS level exceeds its robust (MAD) level by this factor is called impulsive: a
-minority of vertices moved far. Measured: Gaussian and Kinect inputs 1.00-1.10, the impulsive
-inputs 1.48 (twelve, pierrot) and 2.3 (nicolo i2)."""
-
-
-def is_impulsive(gamma: float, gamma_rms: float) -> bool:
-    """``γ̂_rms > 1.3 γ̂_MAD`` (see :data:`IMPULSIVE_RATIO`)."""
-    return bool(gamma_rms > IMPULSIVE_RATIO * max(gamma, 1e-12))
-
-
-def huber_from_noise(gamma: float, gamma_rms: float) -> float:
-    """Default threshold δ of the robust fidelity (:mod:`meshrepair.fidelity`): ``2 γ̂_rms``
-    for impulsive noise, 0 (the paper's quadratic fidelity) otherwise."""
-    return 2.0 * gamma_rms if is_impulsive(gamma, gamma_rms) else 0.0
-
-
-def willmore_weight_from_scale(rho: float, impulsive: bool = False,
-                               tangential: float = 0.0) -> float:
-    """Weight ``w`` of edge-Willmore from the noise correlation ratio ρ of
-    :func:`meshrepair.scale.noise_scale` (``ρ = 1`` for i.i.d. noise):
-
-    .. math:: w = \\mathrm{clip}(1 + 150(ρ - 1.12),\\, 1,\\, 16),
-
-    1 for white noise (ρ ≤ 1.12; the Gaussian inputs read 0.83-1.09), 16 for scanner-like noise
-    correlated over ≥ 2 rings (ρ ≥ 1.22; the real Kinect scan reads 1.21-1.23).
-    The quadratic prior ``w ||DN||²`` against the coupling ``β2 ||N - 𝒩(V)||²`` smooths the
-    normals over about ``√(w/β2)`` rings, so a larger ``w`` acts at the scale of the noise.
-    Impulsive noise raises ρ through its isolated spikes (w = 1), and so do noise with a
-    tangential part and low noise on an irregular mesh (the tangential residual and the
-    curvature left in the reference): the weight is raised only when the noise lies along the
-    normals, ``tangential`` (:func:`meshrepair.scale.tangential_ratio`) < 0.65. Measured false
-    positives without that test: rocker_arm γ0.1 normal (r_t 1.13, ρ 1.28), rocker_arm γ0.1
-    random (r_t 2.22, ρ 1.35), spot / nicolo γ0.1 random (r_t 1.35 / 1.85, ρ 1.23 / 1.22); the
-    real Kinect scan reads ρ 1.22 with r_t 0.34. Smooth synthetic correlated noise can read
-    r_t ≥ 0.65 (its high-passed normal part is small) and is then missed (docs/parameters.md).
-    """
-    if impulsive or tangential >= TANGENTIAL_MAX:
-        return 1.0
-    return float(np.clip(1.0 + 150.0 * (rho - 1.12), 1.0, 16.0))
-
-
-CAD_SUPPORT = 0.2
-CAD_WILLMORE = 6.0
-"""Rule of :func:`outside_weight`: a mesh whose crease-supported region covers at least
-``CAD_SUPPORT`` of its edges is a CAD part, and edge-Willmore outside that region gets the
-weight ``CAD_WILLMORE`` (times ``w``) in the feature stage."""
-
-
-def outside_weight(support_fraction: float, tangential: float) -> float:
-    """Factor on edge-Willmore *outside* the crease-supported region C, feature stage only:
-
-    .. math:: w_{out} = \\begin{cases} 6 & |C| / n_E \\ge 0.2 \\text{ and } r_t < 0.65 \\\\
-                                       1 & \\text{otherwise.} \\end{cases}
-
-    Outside C a CAD part is smooth patches (planes, cylinders, blends) far from its creases.
-    The quadratic prior ``w ||t_e||²`` against the coupling ``β2 ||N - 𝒩(V)||²`` averages the
-    normals over about ``√(w/β2)`` rings; with ``w = 1`` it leaves a ripple of a few degrees
-    there (tgv_fandisk: median face error 1.67° outside C against MeshTGV's 0.88°; inside C
-    ours is already lower). ``w_out = 6`` averages over ≈ 1.5 rings more and measured 0.96°.
-    It is quadratic, so it does not terrace the curved patches the flat-TV class would.
-
-    The supported fraction separates the cases: CAD parts 0.41-0.64 (fandisk, twelve,
-    sharp_sphere, trim_star, screwdriver), the organic meshes 0.04-0.10 (nicolo, igea,
-    pierrot, bunny, rocker_arm: short left-over chains), so organic results do not change.
-    Heavy noise on coarse organic meshes can read high (spot γ0.4 0.63, camelhead 0.96); there
-    C covers nearly everything and the factor acts on little. Noise not along the normals
-    (``r_t ≥ 0.65``, :data:`TANGENTIAL_MAX`) keeps 1: fandisk γ0.4 random lost 9 % with it.
-    Measured in docs/parameters.md (round 4).
-    """
-    if support_fraction >= CAD_SUPPORT and tangential < TANGENTIAL_MAX:
-        return CAD_WILLMORE
-    return 1.0
-
-
-POLISH = True
-"""Heavy noise on a CAD part gets the crease-bounded polish of :mod:`meshrepair.polish`."""
-
-
-def polish_rule(gamma: float, outside: float, willmore: float, length: float
-                ) -> tuple[int, float, int] | None:
-    """Whether the result is polished (:mod:`meshrepair.polish`) and with which ring count
-    ``r``, flatness threshold ``τ`` (degrees) and number of passes:
-
-    .. math:: \\text{polish} \\iff (\\max(γ̂, γ̂_{rms}) > 0.33 \\wedge w_{out} > 1)
-              \\vee w > 1, \\qquad
-              r = \\mathrm{round}(4 \\max(1, ℓ)),\\; τ = 5° \\max(1, ℓ),\\;
-              n_{pass} = \\mathrm{round}(10 \\max(1, ℓ^2)),
-
-    heavy noise (:data:`HEAVY_NOISE`) on a CAD part with the noise along the normals (the
-    rule of :func:`outside_weight`), or noise found correlated along the normals (``w > 1``,
-    :func:`willmore_weight_from_scale`), with ``ℓ`` its correlation length (0 for white
-    noise). A bump ``ℓ`` edges wide is averaged by a neighbourhood ``ℓ`` times wider; its
-    residual slopes are larger (hence τ), and the filter-and-move passes diffuse, like the
-    V-steps of :func:`inner_iters_from_scale`, over about ``ℓ²`` times as many passes.
-    At moderate white noise the feature stage already leaves the flat patches within 2°
-    (tgv_fandisk) and the same filter on gcn_trim_star_n3 (γ̂ 0.27) without the gate measured
-    75 → 129; organic meshes and random-direction noise have no converged crease mask to
-    bound it. Measured in docs/parameters.md (round 5): gcn_fandisk_n6 MSAE 58.7 → 51.5,
-    fandisk γ0.7 124.3 → 113.4; the Kinect scan 167.6 → 155.0 (ℓ = √2: r = 6, τ = 7.1°, 20
-    passes).
-    """
-    heavy = gamma > HEAVY_NOISE and outside > 1.0
-    if not POLISH or not (heavy or willmore > 1.0):
-        return None
-    ell = max(1.0, float(length)) if willmore > 1.0 and np.isfinite(length) else 1.0
-    return int(round(4 * ell)), 5.0 * ell, int(round(10 * ell * ell))
-
-
-def inner_iters_from_scale(length: float, base: int = 3) -> int:
-    r"""V-steps per ADMM iteration for noise correlated over ``ℓ`` mean edge lengths
-    (:func:`meshrepair.scale.noise_scale`), used when the noise is found correlated (``w > 1``):
-
-    .. math:: n_{inner} = \mathrm{clip}(\mathrm{round}(3\, \max(1, ℓ^2)),\, 3,\, 12).
-
-    The V-update (26) is solved by a few preconditioned gradient steps, each moving a vertex
-    from its 1-ring: a bump of the vertices ``ℓ`` rings wide needs about ``ℓ²`` times as many
-    local steps to follow the smoothed normals as a one-ring bump (diffusion). On the real
-    Kinect scan (``ℓ ≈ 1.4-1.7``) the ADMM normals and the mesh's own normals keep the same
-    error (184 / 184 deg²), so the vertices, not the prior, hold the low-frequency bumps in;
-    3 / 6 / 10 / 20 steps (probe and solve): MSAE 184 / 167 / 169 / 170. The probe is run
-    again with the new count (the correlation is known only after a first probe): its better
-    converged normals keep a few crease chains (support 0 → 2.6 % of the edges); with 6 steps
-    in the final solve only, 176. On i.i.d. heavy noise more steps hurt (gcn_fandisk_n6 64 →
-    78 with 6), hence only for correlated noise (``w > 1``).
-    """
-    return int(np.clip(round(base * max(1.0, float(length) ** 2)), base, 12))
 
 
 def default_stages(*, robust_iters: int = 40, feature_iters: int = 60, a: float = 10.0,
@@ -543,30 +292,6 @@ def denoise(
                         n_solver=n_solver, stages=stages, huber_delta=huber_delta,
                         willmore_weight=willmore_weight, regions=regions, polish=polish,
                         callback=callback)
-
-
-COLLAPSE_VOLUME_RATIO = 0.5
-"""A closed mesh whose enclosed volume falls below this fraction of the input's is collapsed:
-measured with the defaults on the 7 closed shared meshes (fandisk, spot, trim_star, twelve,
-rocker_arm, sharp_sphere, screwdriver) at γ = 0.3, normal and random directions, the ratio stays
-in [0.9967, 1.0071], while the robust stage flattens a tetrahedron with γ = 0.1 to 1 % of its
-volume."""
-
-
-def _volume_ratio(V: np.ndarray, V_out: np.ndarray, F: np.ndarray, report) -> float | None:
-    """Signed volume of the result over the input's, for a closed mesh with a clear volume
-    (``|vol| > 1e-6 diag³``); None otherwise."""
-    if not report.is_closed or len(F) == 0:
-        return None
-
-    from ._kernels.faces import signed_volume
-
-    c = V.mean(axis=0)
-    v_in = signed_volume(V, F, c)
-    diag = float(np.linalg.norm(np.ptp(V, axis=0)))
-    if not np.isfinite(v_in) or abs(v_in) <= 1e-6 * diag**3:
-        return None
-    return signed_volume(V_out, F, c) / v_in
 
 
 def _denoise(V, F, *, lam, th, a, robust_iters, feature_iters, mask_update_every,

@@ -1,0 +1,138 @@
+"""Checks and repairs of a denoising result: the fidelity data where the input was folded,
+faces still folded in the result (unfolded cluster by cluster where the robust probe agrees),
+and the volume test that catches a collapsed closed mesh (docs/parameters.md, rounds 2-3).
+
+Used by :func:`meshrepair.denoise.denoise` (which re-exports these names).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .relax import untangle
+
+UNFOLD_DATA_IMPULSIVE = True
+"""Where the input had folded faces, the unfolded mesh (:func:`meshrepair.relax.untangle`) is
+the *start* of the solve, and the fidelity term keeps the *input* as its data ``V⁰``, except for
+impulsive noise, where the folds are made by thrown vertices and the unfolded positions are the
+better data. Umbrella unfolding moves every vertex of a folded fan tangentially as well (nllr_igea:
+2,601 of 8,268 vertices, 0.24 mean edge lengths rms), and a fidelity to it held that tangential
+error in: measured in docs/parameters.md (gcn_trim_star_n3 MSAE 117.8 → 72.8, E_V ratio 1.27 →
+0.86; fandisk γ0.7 183 → 151; held-out spot γ0.4 normal 324 → 509 is the one large loss)."""
+
+
+def fidelity_data(V_input: np.ndarray, V_unfolded: np.ndarray, impulsive: bool) -> np.ndarray:
+    """Data ``V⁰`` of the fidelity term: the input, or the unfolded mesh for impulsive noise
+    (see :data:`UNFOLD_DATA_IMPULSIVE`)."""
+    return V_unfolded if (impulsive and UNFOLD_DATA_IMPULSIVE) else V_input
+
+
+UNFOLD_RESULT = True
+"""Faces still folded over in the *result* are unfolded by the same umbrella step as the input,
+cluster by cluster where the unfolded faces agree better with the robust probe's normals
+(:func:`unfold_result`). With the input as data (:func:`fidelity_data`), a fold of the input on
+a coarse mesh can survive both solves: at γ0.4 normal noise spot (2,930 vertices) kept 31 faces
+folded (errors 57-170°), a third of its MSAE. Measured in docs/parameters.md (round 3): spot
+γ0.4 normal 499 → 318, camelhead γ0.3 490 → 294, sharp_sphere 186 → 156, fandisk γ0.7 164 →
+138, gcn_fandisk_n6 82 → 66; trim_star n3 73 → 77 (without the probe check 88: its true spikes,
+whose faces meet at more than 90° in the truth too, were blunted)."""
+
+
+def unfold_result(V_out: np.ndarray, topo, V_ref: np.ndarray | None = None
+                  ) -> tuple[np.ndarray, int]:
+    """The result with its locally folded faces unfolded.
+
+    A face *f* is folded when ``⟨n_f, Σ_g n_g⟩ ≤ 0`` over its edge-neighbours *g*
+    (:func:`meshrepair.relax.locally_flipped_faces`); the vertices of folded faces and their
+    1-ring are moved to their neighbours' centroid until no face is folded
+    (:func:`meshrepair.relax.untangle`, which keeps the iterate with the fewest folds, so a
+    fold it cannot remove leaves the result unchanged). Vertices away from folds do not move.
+
+    With a reference ``V_ref`` (``denoise`` passes the robust probe's result, which has no
+    folds and keeps true spikes), each connected cluster K of moved vertices keeps its unfolded
+    positions only when the faces touching it then agree better with the reference normals:
+
+    .. math:: \\sum_{f \\sim K} \\angle(n_f(V_u), n_f(V_{ref}))
+              < \\sum_{f \\sim K} \\angle(n_f(V_{out}), n_f(V_{ref})),
+
+    so a true spike whose faces meet at more than 90° (trim_star's) is not blunted.
+
+    Parameters
+    ----------
+    V_out : (nV, 3) float64, the solve's result
+    topo : Topology of the mesh
+    V_ref : (nV, 3) float64, optional reference for the per-cluster check
+
+    Returns
+    -------
+    V : (nV, 3) float64, a new array (``V_out`` itself when nothing is folded)
+    n_folded : int, faces folded in ``V_out``
+    """
+    from .relax import locally_flipped_faces
+
+    n = int(locally_flipped_faces(V_out, topo).sum())
+    if n == 0:
+        return V_out, 0
+    V, _ = untangle(V_out, topo)
+    if V_ref is not None:
+        V = _keep_consistent_clusters(V_out, V, V_ref, topo)
+    return V, n
+
+
+def _keep_consistent_clusters(V_out, V_unf, V_ref, topo):
+    """Per connected cluster of moved vertices, keep the unfolded positions only where the
+    faces touching the cluster agree better with the reference normals (see
+    :func:`unfold_result`)."""
+    import scipy.sparse as sp
+    from scipy.sparse.csgraph import connected_components
+
+    from .geometry import face_normals
+
+    F = topo.faces
+    moved = np.any(V_unf != V_out, axis=1)
+    if not moved.any():
+        return V_unf
+    e = topo.edges[moved[topo.edges[:, 0]] & moved[topo.edges[:, 1]]]
+    nV = topo.n_vertices
+    A = sp.coo_matrix((np.ones(len(e)), (e[:, 0], e[:, 1])), shape=(nV, nV))
+    _, lab = connected_components(A, directed=False)
+    lab = np.where(moved, lab, -1)
+    Nr = face_normals(V_ref, F)
+
+    def ang(X):
+        return np.arccos(np.clip(np.einsum("ij,ij->i", face_normals(X, F), Nr), -1.0, 1.0))
+
+    a0, a1 = ang(V_out), ang(V_unf)
+    fl = lab[F].max(axis=1)  # the moved vertices of a face are adjacent: one cluster
+    m = fl >= 0
+    nc = int(lab.max()) + 1
+    d = np.bincount(fl[m], weights=a1[m] - a0[m], minlength=nc)
+    keep = d < 0
+    out = V_out.copy()
+    sel = moved & keep[np.maximum(lab, 0)]
+    out[sel] = V_unf[sel]
+    return out
+
+
+COLLAPSE_VOLUME_RATIO = 0.5
+"""A closed mesh whose enclosed volume falls below this fraction of the input's is collapsed:
+measured with the defaults on the 7 closed shared meshes (fandisk, spot, trim_star, twelve,
+rocker_arm, sharp_sphere, screwdriver) at γ = 0.3, normal and random directions, the ratio stays
+in [0.9967, 1.0071], while the robust stage flattens a tetrahedron with γ = 0.1 to 1 % of its
+volume."""
+
+
+def _volume_ratio(V: np.ndarray, V_out: np.ndarray, F: np.ndarray, report) -> float | None:
+    """Signed volume of the result over the input's, for a closed mesh with a clear volume
+    (``|vol| > 1e-6 diag³``); None otherwise."""
+    if not report.is_closed or len(F) == 0:
+        return None
+
+    from ._kernels.faces import signed_volume
+
+    c = V.mean(axis=0)
+    v_in = signed_volume(V, F, c)
+    diag = float(np.linalg.norm(np.ptp(V, axis=0)))
+    if not np.isfinite(v_in) or abs(v_in) <= 1e-6 * diag**3:
+        return None
+    return signed_volume(V_out, F, c) / v_in

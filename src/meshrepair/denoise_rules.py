@@ -1,0 +1,192 @@
+"""The rules that read the input: every default of :func:`meshrepair.denoise.denoise` that is
+computed from the mesh (noise level, its scale and direction, impulsiveness, the crease-supported
+fraction), each written as maths with the measurements behind it (docs/parameters.md).
+
+Pure functions of the statistics :mod:`meshrepair.noise`, :mod:`meshrepair.scale` and
+:mod:`meshrepair.regions` compute; :mod:`meshrepair.denoise` applies them (and re-exports them,
+so ``meshrepair.denoise.outside_weight`` and the constants stay where they were).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+HEAVY_NOISE = 0.33
+HEAVY_SLOPE = 600.0
+"""Above this estimated level the robust stage grows by 600 iterations per unit of γ̂ (up to 120):
+heavy noise is otherwise frozen in by the feature stage (measured in docs/parameters.md)."""
+
+
+HEAVY_ROBUST_A = 0.25
+
+
+def robust_a_from_noise(gamma: float) -> float:
+    """Non-convexity of the robust stage: 0.5, or ``HEAVY_ROBUST_A`` above ``HEAVY_NOISE``."""
+    return HEAVY_ROBUST_A if gamma > HEAVY_NOISE else 0.5
+
+
+def robust_iters_from_noise(gamma: float, folded_fraction: float = 0.0) -> int:
+    """Default length of the robust stage: ``clip(130 γ̂, 10, 40)``, or 40 when more than 1 % of
+    the faces were folded over. ``denoise`` passes the larger of the MAD and RMS noise
+    estimates, so impulsive noise (RMS 1.5× MAD) also gets the long stage.
+
+    Measured (benchmarks in docs/parameters.md): at γ = 0.1 a 10-iteration robust stage halves
+    MSAE against 40 on organic meshes (spot 59 → 41, rocker_arm 72 → 41) and on fandisk (8.4 →
+    5.0); at γ = 0.3 the long stage is needed (fandisk 25 with 40, 49 with 10). Random-direction
+    noise reads about half its level but still wants the long stage; its fold-overs give it away.
+    """
+    if gamma > HEAVY_NOISE:
+        return int(np.clip(round(40 + HEAVY_SLOPE * (gamma - HEAVY_NOISE)), 40, 120))
+    if folded_fraction > 0.01:
+        return 40
+    return int(np.clip(round(130.0 * gamma), 10, 40))
+
+
+def lambda_from_noise(gamma: float) -> float:
+    """Default fidelity weight λ for an estimated noise level γ̂ (mean edge lengths)."""
+    return float(np.clip(0.02 / max(gamma, 1e-3) ** 2, 0.05, 1.0))
+
+
+TANGENTIAL_MAX = 0.65
+"""Below this :func:`meshrepair.scale.tangential_ratio` the noise is taken to lie along the
+normals (measured 0.08-0.47 on normal noise, 0.83-1.29 on random-direction noise) and the
+crease-supported region gets the tangential anchor of
+:func:`meshrepair.fidelity.tangential_anchor`."""
+
+
+PROBE_MAX_ITERS = 120
+PROBE_EARLY_STOP = True
+"""Cap of the robust probe that decides the crease-supported region."""
+
+FLAT_SPREAD_DEFAULT = 7.0
+"""Crease-supported edges whose robust-probe normal spread is below this (degrees) get the
+flat-TV prior (MC with ``a = FLAT_A``) in the feature stage instead of edge-Willmore."""
+FLAT_A = 0.5
+
+IMPULSIVE_RATIO = 1.3
+"""Noise whose RMS level exceeds its robust (MAD) level by this factor is called impulsive: a
+minority of vertices moved far. Measured: Gaussian and Kinect inputs 1.00-1.10, the impulsive
+inputs 1.48 (twelve, pierrot) and 2.3 (nicolo i2)."""
+
+
+def is_impulsive(gamma: float, gamma_rms: float) -> bool:
+    """``γ̂_rms > 1.3 γ̂_MAD`` (see :data:`IMPULSIVE_RATIO`)."""
+    return bool(gamma_rms > IMPULSIVE_RATIO * max(gamma, 1e-12))
+
+
+def huber_from_noise(gamma: float, gamma_rms: float) -> float:
+    """Default threshold δ of the robust fidelity (:mod:`meshrepair.fidelity`): ``2 γ̂_rms``
+    for impulsive noise, 0 (the paper's quadratic fidelity) otherwise."""
+    return 2.0 * gamma_rms if is_impulsive(gamma, gamma_rms) else 0.0
+
+
+def willmore_weight_from_scale(rho: float, impulsive: bool = False,
+                               tangential: float = 0.0) -> float:
+    """Weight ``w`` of edge-Willmore from the noise correlation ratio ρ of
+    :func:`meshrepair.scale.noise_scale` (``ρ = 1`` for i.i.d. noise):
+
+    .. math:: w = \\mathrm{clip}(1 + 150(ρ - 1.12),\\, 1,\\, 16),
+
+    1 for white noise (ρ ≤ 1.12; the Gaussian inputs read 0.83-1.09), 16 for scanner-like noise
+    correlated over ≥ 2 rings (ρ ≥ 1.22; the real Kinect scan reads 1.21-1.23).
+    The quadratic prior ``w ||DN||²`` against the coupling ``β2 ||N - 𝒩(V)||²`` smooths the
+    normals over about ``√(w/β2)`` rings, so a larger ``w`` acts at the scale of the noise.
+    Impulsive noise raises ρ through its isolated spikes (w = 1), and so do noise with a
+    tangential part and low noise on an irregular mesh (the tangential residual and the
+    curvature left in the reference): the weight is raised only when the noise lies along the
+    normals, ``tangential`` (:func:`meshrepair.scale.tangential_ratio`) < 0.65. Measured false
+    positives without that test: rocker_arm γ0.1 normal (r_t 1.13, ρ 1.28), rocker_arm γ0.1
+    random (r_t 2.22, ρ 1.35), spot / nicolo γ0.1 random (r_t 1.35 / 1.85, ρ 1.23 / 1.22); the
+    real Kinect scan reads ρ 1.22 with r_t 0.34. Smooth synthetic correlated noise can read
+    r_t ≥ 0.65 (its high-passed normal part is small) and is then missed (docs/parameters.md).
+    """
+    if impulsive or tangential >= TANGENTIAL_MAX:
+        return 1.0
+    return float(np.clip(1.0 + 150.0 * (rho - 1.12), 1.0, 16.0))
+
+
+CAD_SUPPORT = 0.2
+CAD_WILLMORE = 6.0
+"""Rule of :func:`outside_weight`: a mesh whose crease-supported region covers at least
+``CAD_SUPPORT`` of its edges is a CAD part, and edge-Willmore outside that region gets the
+weight ``CAD_WILLMORE`` (times ``w``) in the feature stage."""
+
+
+def outside_weight(support_fraction: float, tangential: float) -> float:
+    """Factor on edge-Willmore *outside* the crease-supported region C, feature stage only:
+
+    .. math:: w_{out} = \\begin{cases} 6 & |C| / n_E \\ge 0.2 \\text{ and } r_t < 0.65 \\\\
+                                       1 & \\text{otherwise.} \\end{cases}
+
+    Outside C a CAD part is smooth patches (planes, cylinders, blends) far from its creases.
+    The quadratic prior ``w ||t_e||²`` against the coupling ``β2 ||N - 𝒩(V)||²`` averages the
+    normals over about ``√(w/β2)`` rings; with ``w = 1`` it leaves a ripple of a few degrees
+    there (tgv_fandisk: median face error 1.67° outside C against MeshTGV's 0.88°; inside C
+    ours is already lower). ``w_out = 6`` averages over ≈ 1.5 rings more and measured 0.96°.
+    It is quadratic, so it does not terrace the curved patches the flat-TV class would.
+
+    The supported fraction separates the cases: CAD parts 0.41-0.64 (fandisk, twelve,
+    sharp_sphere, trim_star, screwdriver), the organic meshes 0.04-0.10 (nicolo, igea,
+    pierrot, bunny, rocker_arm: short left-over chains), so organic results do not change.
+    Heavy noise on coarse organic meshes can read high (spot γ0.4 0.63, camelhead 0.96); there
+    C covers nearly everything and the factor acts on little. Noise not along the normals
+    (``r_t ≥ 0.65``, :data:`TANGENTIAL_MAX`) keeps 1: fandisk γ0.4 random lost 9 % with it.
+    Measured in docs/parameters.md (round 4).
+    """
+    if support_fraction >= CAD_SUPPORT and tangential < TANGENTIAL_MAX:
+        return CAD_WILLMORE
+    return 1.0
+
+
+POLISH = True
+"""Heavy noise on a CAD part gets the crease-bounded polish of :mod:`meshrepair.polish`."""
+
+
+def polish_rule(gamma: float, outside: float, willmore: float, length: float
+                ) -> tuple[int, float, int] | None:
+    """Whether the result is polished (:mod:`meshrepair.polish`) and with which ring count
+    ``r``, flatness threshold ``τ`` (degrees) and number of passes:
+
+    .. math:: \\text{polish} \\iff (\\max(γ̂, γ̂_{rms}) > 0.33 \\wedge w_{out} > 1)
+              \\vee w > 1, \\qquad
+              r = \\mathrm{round}(4 \\max(1, ℓ)),\\; τ = 5° \\max(1, ℓ),\\;
+              n_{pass} = \\mathrm{round}(10 \\max(1, ℓ^2)),
+
+    heavy noise (:data:`HEAVY_NOISE`) on a CAD part with the noise along the normals (the
+    rule of :func:`outside_weight`), or noise found correlated along the normals (``w > 1``,
+    :func:`willmore_weight_from_scale`), with ``ℓ`` its correlation length (0 for white
+    noise). A bump ``ℓ`` edges wide is averaged by a neighbourhood ``ℓ`` times wider; its
+    residual slopes are larger (hence τ), and the filter-and-move passes diffuse, like the
+    V-steps of :func:`inner_iters_from_scale`, over about ``ℓ²`` times as many passes.
+    At moderate white noise the feature stage already leaves the flat patches within 2°
+    (tgv_fandisk) and the same filter on gcn_trim_star_n3 (γ̂ 0.27) without the gate measured
+    75 → 129; organic meshes and random-direction noise have no converged crease mask to
+    bound it. Measured in docs/parameters.md (round 5): gcn_fandisk_n6 MSAE 58.7 → 51.5,
+    fandisk γ0.7 124.3 → 113.4; the Kinect scan 167.6 → 155.0 (ℓ = √2: r = 6, τ = 7.1°, 20
+    passes).
+    """
+    heavy = gamma > HEAVY_NOISE and outside > 1.0
+    if not POLISH or not (heavy or willmore > 1.0):
+        return None
+    ell = max(1.0, float(length)) if willmore > 1.0 and np.isfinite(length) else 1.0
+    return int(round(4 * ell)), 5.0 * ell, int(round(10 * ell * ell))
+
+
+def inner_iters_from_scale(length: float, base: int = 3) -> int:
+    r"""V-steps per ADMM iteration for noise correlated over ``ℓ`` mean edge lengths
+    (:func:`meshrepair.scale.noise_scale`), used when the noise is found correlated (``w > 1``):
+
+    .. math:: n_{inner} = \mathrm{clip}(\mathrm{round}(3\, \max(1, ℓ^2)),\, 3,\, 12).
+
+    The V-update (26) is solved by a few preconditioned gradient steps, each moving a vertex
+    from its 1-ring: a bump of the vertices ``ℓ`` rings wide needs about ``ℓ²`` times as many
+    local steps to follow the smoothed normals as a one-ring bump (diffusion). On the real
+    Kinect scan (``ℓ ≈ 1.4-1.7``) the ADMM normals and the mesh's own normals keep the same
+    error (184 / 184 deg²), so the vertices, not the prior, hold the low-frequency bumps in;
+    3 / 6 / 10 / 20 steps (probe and solve): MSAE 184 / 167 / 169 / 170. The probe is run
+    again with the new count (the correlation is known only after a first probe): its better
+    converged normals keep a few crease chains (support 0 → 2.6 % of the edges); with 6 steps
+    in the final solve only, 176. On i.i.d. heavy noise more steps hurt (gcn_fandisk_n6 64 →
+    78 with 6), hence only for correlated noise (``w > 1``).
+    """
+    return int(np.clip(round(base * max(1.0, float(length) ** 2)), base, 12))
