@@ -80,6 +80,7 @@ from .denoise_rules import (  # noqa: F401  (re-exported: the rules read from th
     polish_rule,
     robust_a_from_noise,
     robust_iters_from_noise,
+    warm_start_from_probe,
     willmore_weight_from_scale,
 )
 from .errors import MeshRepairError
@@ -418,12 +419,18 @@ def _denoise(V, F, *, lam, th, a, robust_iters, feature_iters, mask_update_every
                  "level %.3f); willmore weight %g", 100 * sup.mean(), ns.rho, ns.length,
                  ns.gamma, ww)
 
+    Vi_main = Vi  # impulsive noise on a CAD part: the main run starts from the probe
+    warm = r1_V is not None and warm_start_from_probe(impulsive, info["outside_weight"], gamma)
+    if warm:
+        Vi_main = r1.V
+    info["start_from_probe"] = bool(warm)
+
     def solve(stages_):
         """The main run; on a reordered copy the result is mapped back exactly."""
         opts = SolverOptions(stages=tuple(stages_), willmore_weight=ww, **opts_kw)
         res = ADMMSolver(Fw, len(V), options=opts, topo=topo_w, edge_force=force,
                          flat_edges=flat, anchor=anchor, willmore_edges=wedges
-                         ).solve(Vd, Vi, callback=callback)
+                         ).solve(Vd, Vi_main, callback=callback)
         if reorder:
             return res, res.V[inv], _edge_values_to(topo, topo_w, pf, res.M_E)
         return res, res.V, res.M_E
@@ -441,6 +448,8 @@ def _denoise(V, F, *, lam, th, a, robust_iters, feature_iters, mask_update_every
         robust_iters = 0
         # the probe's decisions came from the collapsed robust run: drop them too
         force = flat = anchor = wedges = sup_v = None
+        Vi_main = Vi
+        info["start_from_probe"] = False
         ww = 1.0 if willmore_weight is None else float(willmore_weight)
         lam_used = lambda_from_noise(gamma) if lam is None else float(lam)
         opts_kw["lam"] = lam_used
