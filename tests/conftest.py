@@ -22,6 +22,15 @@ def shared_mesh(name: str):
     return m.V, m.F
 
 
+def published_triple(case: str):
+    """``(V_noisy, V_truth, V_published, F)`` of a triple in ../shared/meshes/published (same
+    vertex order and faces in all three)."""
+    Vn, F = shared_mesh(f"published/{case}__noisy.ply")
+    Vt, _ = shared_mesh(f"published/{case}__truth.ply")
+    Vp, _ = shared_mesh(f"published/{case}__published.ply")
+    return Vn, Vt, Vp, F
+
+
 @pytest.fixture
 def require_shared():
     """Fail (never skip) when the shared meshes are missing: tests that need them must run."""

@@ -13,7 +13,7 @@ from meshrepair.scale import correlated_noise, noise_scale
 from meshrepair.solver import ADMMSolver, SolverOptions, Stage
 from meshrepair.topology import edge_topology
 
-from .conftest import shared_mesh
+from .conftest import published_triple, shared_mesh
 
 
 def grid(n=50):
@@ -246,9 +246,7 @@ def test_quality_published_trim_star_beats_gcn():
     round 1, with the unfolded mesh as fidelity data: 117.8, 5.74°, 1.27×)."""
     from meshrepair import vertex_error
 
-    Vn, F = shared_mesh("published/gcn_trim_star_n3__noisy.ply")
-    Vt, _ = shared_mesh("published/gcn_trim_star_n3__truth.ply")
-    Vp, _ = shared_mesh("published/gcn_trim_star_n3__published.ply")
+    Vn, Vt, Vp, F = published_triple("gcn_trim_star_n3")
     r = denoise(Vn, F)
 
     def ea(X):

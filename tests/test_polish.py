@@ -19,7 +19,7 @@ from meshrepair.polish import (
 )
 from meshrepair.topology import edge_topology
 
-from .conftest import shared_mesh
+from .conftest import published_triple
 
 denoise_mod = importlib.import_module("meshrepair.denoise")
 rules_mod = importlib.import_module("meshrepair.denoise_rules")
@@ -223,9 +223,7 @@ def test_polish_rule():
 def test_quality_published_gcn_fandisk_n6_polish():
     """gcn_fandisk_n6 (heavy noise): the polish fires and MSAE beats GCN-Denoiser's published
     output (measured 51.5 vs 53.9; without the polish 58.7); E_a 4.17° against 3.95° (missed)."""
-    Vn, F = shared_mesh("published/gcn_fandisk_n6__noisy.ply")
-    Vt, _ = shared_mesh("published/gcn_fandisk_n6__truth.ply")
-    Vp, _ = shared_mesh("published/gcn_fandisk_n6__published.ply")
+    Vn, Vt, Vp, F = published_triple("gcn_fandisk_n6")
     r = denoise(Vn, F)
     assert r.params["polished"] > 0.5
     assert msae(r.V, Vt, F) < msae(Vp, Vt, F)
@@ -237,9 +235,7 @@ def test_quality_published_kinect_polish_at_the_noise_scale():
     """tgv_kinect_pyramid (real scan, correlated noise ℓ = √2): the polish runs with 6 rings
     and 20 passes and MSAE beats MeshTGV's published output (measured 153.2 vs 162.9; 165.7
     without the polish); E_a 6.95° against 6.17° (missed), asserted within 1.2×."""
-    Vn, F = shared_mesh("published/tgv_kinect_pyramid__noisy.ply")
-    Vt, _ = shared_mesh("published/tgv_kinect_pyramid__truth.ply")
-    Vp, _ = shared_mesh("published/tgv_kinect_pyramid__published.ply")
+    Vn, Vt, Vp, F = published_triple("tgv_kinect_pyramid")
     r = denoise(Vn, F)
     assert r.params["willmore_weight"] > 1.0 and r.params["polished"] > 0.5
 

@@ -12,7 +12,7 @@ from meshrepair import add_noise, denoise, mean_angle_error, msae
 from meshrepair.priors import reg_energy_mixed, t_update_mixed
 from meshrepair.solver import ADMMSolver, SolverOptions, Stage
 
-from .conftest import shared_mesh
+from .conftest import published_triple
 
 denoise_mod = importlib.import_module("meshrepair.denoise")
 rules_mod = importlib.import_module("meshrepair.denoise_rules")
@@ -129,9 +129,7 @@ def test_quality_published_tgv_fandisk_beats_meshtgv():
     face-normal angle E_a (measured 12.0 vs 14.3 and 1.93° vs 2.07°; with w_out = 1: 12.7,
     2.28°)."""
 
-    Vn, F = shared_mesh("published/tgv_fandisk__noisy.ply")
-    Vt, _ = shared_mesh("published/tgv_fandisk__truth.ply")
-    Vp, _ = shared_mesh("published/tgv_fandisk__published.ply")
+    Vn, Vt, Vp, F = published_triple("tgv_fandisk")
     r = denoise(Vn, F)
 
     def ea(X):
@@ -176,9 +174,7 @@ def test_quality_published_kinect_correlated_steps():
     8.34° vs 6.17° in round 4, 153.2 / 6.95° with round 6's polish; before round 4 184.0 /
     9.22°)."""
 
-    Vn, F = shared_mesh("published/tgv_kinect_pyramid__noisy.ply")
-    Vt, _ = shared_mesh("published/tgv_kinect_pyramid__truth.ply")
-    Vp, _ = shared_mesh("published/tgv_kinect_pyramid__published.ply")
+    Vn, Vt, Vp, F = published_triple("tgv_kinect_pyramid")
     r = denoise(Vn, F)
     assert r.params["willmore_weight"] > 1.0 and r.params["inner_iters"] == 6
 

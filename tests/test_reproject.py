@@ -12,7 +12,7 @@ from meshrepair.reproject import (
     tangential_smooth,
 )
 
-from .conftest import shared_mesh
+from .conftest import published_triple, shared_mesh
 
 
 def _grid(n=12):
@@ -188,9 +188,7 @@ def test_denoise_reanchor_organic_ev():
     on random-direction noise it stays off."""
     from meshrepair import add_noise, denoise, msae, vertex_error
 
-    Vn, F = shared_mesh("published/nllr_igea__noisy.ply")
-    Vt, _ = shared_mesh("published/nllr_igea__truth.ply")
-    Vp, _ = shared_mesh("published/nllr_igea__published.ply")
+    Vn, Vt, Vp, F = published_triple("nllr_igea")
     r = denoise(Vn, F)
     assert r.params["reanchored"] > 0.8 * len(Vn)
     assert r.params["reanchor_ratio"] < 0.6
