@@ -31,8 +31,7 @@ recorded in ``DenoiseResult.params``):
    result's vertices slide along the result surface towards the closest points of the input's
    vertices, ``V_i + w_i (π_S(V⁰_i) - V_i)`` with the least-variance weights
    ``w_i = σ²/(σ² + κ² d_i²)``, when the residual tangential ratio reads noise along the
-   normals (``ρ_t < 0.6``) and the noise is not heavy, or the result was polished
-   (:data:`REANCHOR`, :func:`meshrepair.denoise_rules.reanchor_runs`).
+   normals (``ρ_t < 0.6``) and the noise is not heavy (:data:`REANCHOR`).
 
 Throughout: λ = ``clip(0.02 / γ̂², 0.05, 1)``; the Willmore weight ``w`` from ρ for correlated
 noise along the normals (:func:`willmore_weight_from_scale`) and then ``3 max(1, ℓ²)`` V-steps
@@ -79,7 +78,6 @@ from .denoise_rules import (  # noqa: F401  (re-exported: the rules read from th
     lambda_from_noise,
     outside_weight,
     polish_rule,
-    reanchor_runs,
     robust_a_from_noise,
     robust_iters_from_noise,
     warm_start_from_probe,
@@ -176,8 +174,7 @@ the result's vertices outside the crease-supported region slide along the result
 towards the input's closest points, with the minimum-variance weights of
 :func:`meshrepair.reproject.blend_weights`, when the residual tangential ratio
 :func:`meshrepair.reproject.residual_tangential_ratio` reads noise along the normals
-(``ρ_t < 0.6``) and the noise is not heavy (``γ̂ ≤ HEAVY_NOISE``) or the polish ran
-(round 9a, :func:`meshrepair.denoise_rules.reanchor_runs`). It runs before
+(``ρ_t < 0.6``) and the noise is not heavy (``γ̂ ≤ HEAVY_NOISE``). It runs before
 :func:`unfold_result`, whose probe check then judges the final positions. Measured in
 docs/parameters.md (issue 12, round 5): nllr_igea MSAE 230.7 → 222.4, E_V ratio 1.58 → 1.13;
 nllr_nicolo E_V 1.22 → 1.07; every CAD row within ±0.2 %. Round 6: the targets are smoothed
@@ -191,7 +188,7 @@ def _reanchor_smooth(V_in, V_out, F, topo, sup_v, gamma, info):
 
     ratio = residual_tangential_ratio(V_out, V_in, F)
     info["reanchor_ratio"] = ratio
-    if not (ratio < REANCHOR_MAX_RATIO) or not reanchor_runs(gamma, info["polished"] > 0):
+    if not (ratio < REANCHOR_MAX_RATIO) or gamma > HEAVY_NOISE:
         return V_out
     V_new, w = reanchor(V_out, V_in, F, ~sup_v, topo=topo)
     info["reanchored"] = int((w > 0).sum())

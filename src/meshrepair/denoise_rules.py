@@ -215,33 +215,3 @@ def warm_start_from_probe(impulsive: bool, outside: float, gamma: float) -> bool
     γ̂ 0.206).
     """
     return bool(WARM_IMPULSIVE and impulsive and outside > 1.0 and gamma > WARM_IMPULSIVE_GAMMA)
-
-
-
-HEAVY_REANCHOR = True
-"""Heavy noise on a polished CAD part is re-anchored too (round 9a, :func:`reanchor_runs`)."""
-
-
-def reanchor_runs(gamma: float, polished: bool) -> bool:
-    """Whether the tangential re-anchoring (:func:`meshrepair.reproject.reanchor`) may run
-    (round 9a; it also needs the residual ratio ``ρ_t < 0.6`` of
-    :func:`meshrepair.reproject.residual_tangential_ratio`):
-
-    .. math:: \\text{re-anchor} \\iff γ̂ \\le 0.33 \\;\\vee\\; \\text{the result was polished}.
-
-    The projection ``π_S(V⁰_i)`` of a data vertex ``V⁰_i = X_i + d_i n`` (``X_i`` its true
-    position, ``d_i`` the noise along the normal) onto a surface S whose normal is tilted by
-    an angle ε from the truth's lands ``≈ d_i sin ε`` away from ``X_i`` tangentially: on a
-    plane (ε = 0) it is ``X_i`` exactly, whatever ``d_i``; the least-variance weights of
-    :func:`meshrepair.reproject.blend_weights` discount large ``d_i`` for that reason. Heavy
-    noise (large ``d_i``) was excluded (round 5: fandisk γ0.7 +3 %) while the solve left a
-    ripple of several degrees on the flat patches. The polish (:func:`polish_rule`) removes
-    that ripple first, so its result is re-anchored like a moderate-noise one: the vertices
-    outside C, where the tangential anchor of the solve does not act and the heavy-noise
-    solve lets them drift 0.16 edge lengths (gcn_fandisk_n6; the input's tangential error is
-    0.001), slide back. Measured in docs/parameters.md (round 9a): gcn_fandisk_n6 E_V
-    2.62e-03 -> 2.16e-03, fandisk γ0.7 3.44e-04 -> 2.93e-04, MSAE within ±1.5 %.
-    """
-    if gamma <= HEAVY_NOISE:
-        return True
-    return bool(HEAVY_REANCHOR and polished)
