@@ -26,7 +26,8 @@ recorded in ``DenoiseResult.params``):
    (:func:`outside_weight`); ``β1 = 1.2 a``, ``β2 ≈ 1.67 β1``; ≤ 60 iterations or rule (35).
 4. *Polish* (heavy noise on CAD parts, correlated noise; :func:`polish_rule`): a bilateral
    normal filter bounded by the converged M_E on the flat patches, at the noise's scale, then
-   the vertices to the filtered normals (:mod:`meshrepair.polish`).
+   the vertices to the filtered normals, keeping the solve's data term
+   (:mod:`meshrepair.polish`, :mod:`meshrepair.polish_fidelity`).
 5. *Tangential re-anchoring* of the smooth region (:mod:`meshrepair.reproject`): outside C the
    result's vertices slide along the result surface towards the closest points of the input's
    vertices, ``V_i + w_i (π_S(V⁰_i) - V_i)`` with the least-variance weights

@@ -29,7 +29,9 @@ features whose curvature within ``r`` rings is larger than τ) keep their normal
 ``E(x) = Σ_f Σ_{i ∈ f} (n'_f · (x_i − c_f))²`` (the V-subproblem (26) with λ = 0 and the
 filtered normals as ``N``), each ``x_i ← x_i + (1/|F_i|) Σ_{f ∋ i} n'_f (n'_f · (c_f − x_i))``,
 20 per filter pass, ``passes`` passes. A mesh whose faces already have the normals ``n'`` is a
-fixed point (``c_f − x_i`` lies in the face's plane).
+fixed point (``c_f − x_i`` lies in the face's plane). With ``data`` and ``eta > 0`` each step
+is followed by the prox of a data term (:mod:`meshrepair.polish_fidelity`, round 9b; what
+:func:`meshrepair.denoise` does).
 
 Defaults: ``r = 4``, ``τ = 5°``, ``passes = 10`` (:func:`meshrepair.denoise.polish_rule`
 scales them with the noise's correlation length); measured in docs/parameters.md (round 5).
