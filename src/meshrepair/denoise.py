@@ -32,6 +32,11 @@ recorded in ``DenoiseResult.params``):
    vertices, ``V_i + w_i (π_S(V⁰_i) - V_i)`` with the least-variance weights
    ``w_i = σ²/(σ² + κ² d_i²)``, when the residual tangential ratio reads noise along the
    normals (``ρ_t < 0.6``) and the noise is not heavy (:data:`REANCHOR`).
+6. *Organic finish* (round 9, :mod:`meshrepair.organic`) on meshes that are not CAD parts, with
+   white noise that is not heavy (:func:`guidance_rule`): a one-ring bilateral normal filter
+   bounded by M_E with Sun et al. vertex steps; then, for impulsive noise or a tangential drift
+   the re-anchoring left (:func:`reintegrate_rule`), the vertices re-integrated from the input
+   by a few Sun et al. steps towards those normals.
 
 Throughout: λ = ``clip(0.02 / γ̂², 0.05, 1)``; the Willmore weight ``w`` from ρ for correlated
 noise along the normals (:func:`willmore_weight_from_scale`) and then ``3 max(1, ℓ²)`` V-steps
