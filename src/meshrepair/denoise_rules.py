@@ -215,3 +215,72 @@ def warm_start_from_probe(impulsive: bool, outside: float, gamma: float) -> bool
     γ̂ 0.206).
     """
     return bool(WARM_IMPULSIVE and impulsive and outside > 1.0 and gamma > WARM_IMPULSIVE_GAMMA)
+
+
+ORGANIC = True
+GUIDANCE_GAMMA_UNIT = 0.09
+"""Noise level (mean edge lengths) per pass of the organic guidance filter."""
+
+
+def guidance_rule(gamma: float, outside: float, willmore: float) -> int:
+    """Passes ``p`` of the one-ring bilateral guidance of :mod:`meshrepair.organic`:
+
+    .. math:: p = \\begin{cases} \\mathrm{clip}(\\mathrm{round}(γ̂ / 0.09), 1, 3) &
+              w_{out} = 1 \\wedge w = 1 \\wedge γ̂ \\le 0.33 \\\\ 0 & \\text{otherwise,}
+              \\end{cases}
+
+    on meshes that are not CAD parts (the rule of :func:`outside_weight` does not fire), with
+    white noise (the Willmore weight of :func:`willmore_weight_from_scale` is 1) that is not
+    heavy (:data:`HEAVY_NOISE`; heavy noise on organic meshes is left to the solve). The
+    residual one-ring ripple of the normals grows with the noise, hence one pass per 0.09 mean
+    edge lengths of γ̂ (the MAD estimate): 1 pass at γ̂ ≈ 0.09 (the impulsive nllr_nicolo and
+    pierrot), 2 at 0.18-0.2 (nicolo γ0.2, spot γ0.4 random), 3 at 0.27 (nllr_igea).
+    Measured in docs/parameters.md (round 9).
+    """
+    if not ORGANIC or outside != 1.0 or willmore != 1.0 or not gamma <= HEAVY_NOISE:
+        return 0
+    return int(np.clip(round(gamma / GUIDANCE_GAMMA_UNIT), 1, 3))
+
+
+REINTEGRATE_RATIO = 0.16
+REINTEGRATE_STEPS_PER_GAMMA = 18.0
+
+
+REINTEGRATE_LEVEL = 0.7
+
+
+def reintegrate_rule(passes: int, reanchored: bool, impulsive: bool, ratio_after: float,
+                     gamma: float, level_ratio: float = 1.0) -> int:
+    """Sun et al. steps ``k`` of the re-integration from the input (:mod:`meshrepair.organic`),
+    0 for none:
+
+    .. math:: k = \\max(2, \\mathrm{round}(18\\, γ̂)) \\quad\\text{when}\\quad p > 0 \\wedge
+              \\text{re-anchored} \\wedge q \\ge 0.7 \\wedge
+              (\\text{impulsive} \\vee ρ_t^{after} > 0.16),
+
+    on the meshes the guidance filter runs on (``p > 0``, :func:`guidance_rule`), whose
+    residual was found to lie along the normals (the re-anchoring of
+    :mod:`meshrepair.reproject` ran: the input's tangential layout is right), whose input is
+    the result plus white noise of the estimated level: ``q`` = the robust level of the input's
+    normal offsets from the result (:func:`meshrepair.organic.residual_level`) over γ̂ reads
+    0.77-0.93 where the solve removed white noise (nllr_igea, nicolo, pierrot, nicolo γ0.2, spot
+    γ0.4 random) and 0.26-0.66 on correlated noise, which the one-ring γ̂ and the result both
+    miss (restarting from that input puts the bumps back: spot correlated m=4 611 → 796 without
+    this test), and either
+
+    * the noise is impulsive (:func:`is_impulsive`): most input vertices are nearly exact, so a
+      few steps from the (capped) input keep them and fix the thrown ones; or
+    * the tangential drift left *after* the re-anchoring is large,
+      ``ρ_t^{after} = rms‖P(V⁰ − V)‖ / rms⟨V⁰ − V, n⟩`` above 0.16 (the re-anchoring's guards
+      kept it): nllr_igea reads 0.18, the Gaussian inputs where the step loses 0.11-0.14.
+
+    ``k`` grows with the noise: the steps are the only regulariser of the fit (module docstring
+    of :mod:`meshrepair.organic`), and more noise needs more of them (γ̂ ≈ 0.09 → 2 on the
+    impulsive nllr_nicolo and pierrot, 0.27 → 5 on igea).
+    Measured in docs/parameters.md (round 9).
+    """
+    if passes <= 0 or not reanchored or not level_ratio >= REINTEGRATE_LEVEL:
+        return 0
+    if not (impulsive or ratio_after > REINTEGRATE_RATIO):
+        return 0
+    return int(max(2, round(REINTEGRATE_STEPS_PER_GAMMA * gamma)))

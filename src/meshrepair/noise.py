@@ -31,8 +31,8 @@ def add_noise(V: np.ndarray, F: np.ndarray, gamma: float, *, direction: str = "n
     -------
     (nV, 3) float64, a new array.
     """
+    from .array_contract import check_arrays
     from .options import check_int, check_number
-    from .validate import check_arrays
 
     gamma = check_number("gamma", gamma, low=0) + 0.0  # -0.0 -> 0.0 (numpy refuses scale -0)
     if seed is not None and not isinstance(seed, np.random.SeedSequence):

@@ -35,9 +35,9 @@ from pathlib import Path
 
 import numpy as np
 
+from ..array_contract import _as_face_array, _as_vertex_array
 from ..atomic import atomic_write, check_writable
 from ..errors import MeshRepairError
-from ..validate import _as_face_array, _as_vertex_array
 from .arrays import as_arrays
 from .common import MeshData, PathLike, _Bad, _fail_read, _suffix, check_input_file
 from .masks import read_vertex_mask

@@ -6,8 +6,8 @@ from typing import Any
 
 import numpy as np
 
+from ..array_contract import _as_face_array, _as_vertex_array
 from ..errors import MeshRepairError
-from ..validate import _as_face_array, _as_vertex_array
 from .common import MeshData
 
 
