@@ -29,7 +29,9 @@ features whose curvature within ``r`` rings is larger than τ) keep their normal
 ``E(x) = Σ_f Σ_{i ∈ f} (n'_f · (x_i − c_f))²`` (the V-subproblem (26) with λ = 0 and the
 filtered normals as ``N``), each ``x_i ← x_i + (1/|F_i|) Σ_{f ∋ i} n'_f (n'_f · (c_f − x_i))``,
 20 per filter pass, ``passes`` passes. A mesh whose faces already have the normals ``n'`` is a
-fixed point (``c_f − x_i`` lies in the face's plane).
+fixed point (``c_f − x_i`` lies in the face's plane). With ``data`` and ``eta > 0`` each step
+is followed by the prox of a data term (:mod:`meshrepair.polish_fidelity`, round 9b; what
+:func:`meshrepair.denoise` does).
 
 Defaults: ``r = 4``, ``τ = 5°``, ``passes = 10`` (:func:`meshrepair.denoise.polish_rule`
 scales them with the noise's correlation length); measured in docs/parameters.md (round 5).
@@ -135,7 +137,8 @@ def vertex_update(X: np.ndarray, F: np.ndarray, Nt: np.ndarray, steps: int = POL
 
 
 def polish(V: np.ndarray, F: np.ndarray, sharp: np.ndarray, topo, *, rings: int = POLISH_RINGS,
-           tau: float = POLISH_TAU, passes: int = POLISH_PASSES) -> tuple[np.ndarray, float]:
+           tau: float = POLISH_TAU, passes: int = POLISH_PASSES, data: np.ndarray | None = None,
+           eta: float = 0.0) -> tuple[np.ndarray, float]:
     """The heavy-noise polish of the module docstring.
 
     Parameters
@@ -145,6 +148,9 @@ def polish(V: np.ndarray, F: np.ndarray, sharp: np.ndarray, topo, *, rings: int 
     sharp : (nE,) bool, ``M_E`` on ``topo.edges``
     topo : Topology of the mesh
     rings, tau, passes : ``r``, ``τ`` (degrees) and the number of filter passes
+    data : (nV, 3) float64, optional, the fidelity data ``V⁰``; with ``eta > 0`` the vertex
+        step keeps a data term (:mod:`meshrepair.polish_fidelity`, round 9b)
+    eta : float >= 0, its weight per step (0: the vertex step of the module docstring)
 
     Returns
     -------
@@ -161,5 +167,10 @@ def polish(V: np.ndarray, F: np.ndarray, sharp: np.ndarray, topo, *, rings: int 
         return X, 0.0
     for _ in range(passes):
         Nt = filter_normals(X, F, K, gate, sigma_c=rings * le)
-        X = vertex_update(X, F, Nt)
+        if data is not None and eta > 0:
+            from .polish_fidelity import vertex_update_with_data
+
+            X = vertex_update_with_data(X, F, Nt, data, eta=eta)
+        else:
+            X = vertex_update(X, F, Nt)
     return X, float(gate.mean())
