@@ -38,6 +38,9 @@ recorded in ``DenoiseResult.params``):
    bounded by M_E with Sun et al. vertex steps; then, for impulsive noise or a tangential drift
    the re-anchoring left (:func:`reintegrate_rule`), the vertices re-integrated from the input
    by a few Sun et al. steps towards those normals.
+7. *CAD finish* (round 9c, :mod:`meshrepair.cadfinish`) on CAD parts with white noise: the same
+   one-ring filter, one-sided at M_E, on the faces away from M_E and the flat sides of its
+   creases (:func:`meshrepair.cadfinish.cad_finish_rule`).
 
 Throughout: λ = ``clip(0.02 / γ̂², 0.05, 1)``; the Willmore weight ``w`` from ρ for correlated
 noise along the normals (:func:`willmore_weight_from_scale`) and then ``3 max(1, ℓ²)`` V-steps
@@ -539,6 +542,14 @@ def _denoise(V, F, *, lam, th, a, robust_iters, feature_iters, mask_update_every
                 residual_level_ratio=float("nan"))
     if sup_v is not None and willmore_weight is None:  # organic finish (round 9)
         V_out = _organic_finish(V, V_out, F, topo, M_E, gamma, impulsive, ww, info)
+    info.update(cad_finish_passes=0, cad_finish_gated=0.0)
+    if sup_v is not None and willmore_weight is None:  # CAD finish (round 9c)
+        from .cadfinish import cad_finish, cad_finish_rule
+
+        pc = cad_finish_rule(gamma, info["outside_weight"], ww)
+        if pc:
+            V_out, info["cad_finish_gated"] = cad_finish(V_out, F, M_E, topo, passes=pc)
+            info["cad_finish_passes"] = pc
     n_res_folded = 0
     if unfold and UNFOLD_RESULT and not (info["reintegrate_steps"] and REINTEGRATE_KEEPS_FOLDS
                                            and not impulsive):
