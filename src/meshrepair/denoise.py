@@ -436,6 +436,21 @@ def _denoise(V, F, *, lam, th, a, robust_iters, feature_iters, mask_update_every
         return res, res.V, res.M_E
 
     res, V_out, M_E = solve(stages)
+    w_cad = info["outside_weight"]  # the CAD-part decision, read by the polish rule below
+    from . import discrepancy as _dq
+
+    if wedges is not None and _dq.applies(gamma, gamma_rms) and res.stop_reason != "interrupted":
+        # the discrepancy principle on w_out (round 9s): lower it where it smooths away signal
+        q = _dq.discrepancy_ratio(V, V_out, F, sup_v, clip=_dq.CLIP * gamma)
+        info["discrepancy_ratio"] = q
+        for w_try in _dq.FALLBACK_WEIGHTS:
+            if _dq.accept_weight(q):
+                break
+            wedges = np.where(force < 0, ww, ww * w_try) if w_try != 1.0 else None
+            info["outside_weight"] = w_try
+            res, V_out, M_E = solve(stages)
+            q = _dq.discrepancy_ratio(V, V_out, F, sup_v, clip=_dq.CLIP * gamma)
+            log.info("outside weight lowered to %g (discrepancy ratio %.3f)", w_try, q)
     shrink = _volume_ratio(V, V_out, F, report)
     if shrink is not None and shrink < COLLAPSE_VOLUME_RATIO and res.stop_reason != "interrupted":
         if not auto_robust:
@@ -465,7 +480,7 @@ def _denoise(V, F, *, lam, th, a, robust_iters, feature_iters, mask_update_every
                 "has no smooth regions for the model); it cannot be denoised")
     info["polished"] = 0.0
     # the rule reads the automatic decisions only (a user-set Willmore weight is not a finding)
-    pr = polish_rule(max(gamma, gamma_rms), info["outside_weight"],
+    pr = polish_rule(max(gamma, gamma_rms), w_cad,
                      ww if willmore_weight is None else 1.0, info["noise_length"])
     if polish and pr is not None:
         from .polish import polish as _polish
