@@ -489,6 +489,15 @@ def _denoise(V, F, *, lam, th, a, robust_iters, feature_iters, mask_update_every
                                           passes=pr[2])
         log.info("polish (%d rings, %.1f deg, %d passes) on %.1f %% of the faces", *pr,
                  100 * info["polished"])
+    info["lowpass_steps"] = 0
+    if sup_v is not None and willmore_weight is None:  # round 9s: organic mesh, white noise
+        from . import lowpass as _lp
+
+        if _lp.applies(info["support_fraction"], ww, impulsive):
+            k = _lp.steps_from_noise(gamma)
+            nrm = _lp.normal_only(info["tangential_ratio"], gamma)
+            V_out = _lp.taubin_region(V_out, topo.edges, ~sup_v, k, F=F if nrm else None)
+            info["lowpass_steps"] = k
     info.update(reanchor_ratio=float("nan"), reanchored=0, reanchor_shift=0.0)
     if REANCHOR and sup_v is not None:  # before the unfolding: it judges the final positions
         V_out = _reanchor_smooth(V, V_out, F, topo, sup_v, max(gamma, gamma_rms), info)
