@@ -33,6 +33,12 @@ recorded in ``DenoiseResult.params``):
    ``w_i = σ²/(σ² + κ² d_i²)``, when the residual tangential ratio reads noise along the
    normals (``ρ_t < 0.6``) and the noise is not heavy (:data:`REANCHOR`).
 
+Round 9s: on a CAD part the outside weight 6 is lowered to 3 when the normal residual outside C
+exceeds the one in C by more than 3 % (a discrepancy principle, :mod:`meshrepair.discrepancy`;
+the main run is solved again); on an organic mesh with white, non-impulsive noise the smooth
+region gets ``round((γ̂/0.13)²)`` Taubin λ|μ pairs before the re-anchoring
+(:mod:`meshrepair.lowpass`).
+
 Throughout: λ = ``clip(0.02 / γ̂², 0.05, 1)``; the Willmore weight ``w`` from ρ for correlated
 noise along the normals (:func:`willmore_weight_from_scale`) and then ``3 max(1, ℓ²)`` V-steps
 per iteration for its correlation length ℓ, the probe included (:func:`inner_iters_from_scale`);
