@@ -86,10 +86,9 @@ def test_rules():
     assert lp.steps_from_noise(0.065) == 1 and lp.steps_from_noise(0.196) == 2
     assert lp.steps_from_noise(0.27) == 4 and lp.steps_from_noise(0.372) == 8
     assert lp.steps_from_noise(5.0) == lp.MAX_STEPS and lp.steps_from_noise(float("nan")) == 1
-    assert lp.applies(0.02, 1.0, False)
-    assert not lp.applies(0.45, 1.0, False)  # a CAD part
-    assert not lp.applies(0.02, 16.0, False)  # correlated (scanner) noise
-    assert not lp.applies(0.02, 1.0, True)  # impulsive
+    assert lp.applies(0.02, 1.0)
+    assert not lp.applies(0.45, 1.0)  # a CAD part
+    assert not lp.applies(0.02, 16.0)  # correlated (scanner) noise
     assert lp.normal_only(0.4, 0.3) and lp.normal_only(1.2, 0.1) and not lp.normal_only(1.2, 0.2)
 
 

@@ -35,7 +35,7 @@ recorded in ``DenoiseResult.params``):
 
 Round 9s: on a CAD part the outside weight 6 is lowered to 3 when the normal residual outside C
 exceeds the one in C by more than 3 % (a discrepancy principle, :mod:`meshrepair.discrepancy`;
-the main run is solved again); on an organic mesh with white, non-impulsive noise the smooth
+the main run is solved again); on an organic mesh with white noise the smooth
 region gets ``round((γ̂/0.13)²)`` Taubin λ|μ pairs before the re-anchoring
 (:mod:`meshrepair.lowpass`).
 
@@ -499,7 +499,7 @@ def _denoise(V, F, *, lam, th, a, robust_iters, feature_iters, mask_update_every
     if sup_v is not None and willmore_weight is None:  # round 9s: organic mesh, white noise
         from . import lowpass as _lp
 
-        if _lp.applies(info["support_fraction"], ww, impulsive):
+        if _lp.applies(info["support_fraction"], ww):
             k = _lp.steps_from_noise(gamma)
             nrm = _lp.normal_only(info["tangential_ratio"], gamma)
             V_out = _lp.taubin_region(V_out, topo.edges, ~sup_v, k, F=F if nrm else None)
