@@ -443,6 +443,7 @@ def _denoise(V, F, *, lam, th, a, robust_iters, feature_iters, mask_update_every
 
     res, V_out, M_E = solve(stages)
     w_cad = info["outside_weight"]  # the CAD-part decision, read by the polish rule below
+    info["discrepancy_ratio"] = float("nan")
     from . import discrepancy as _dq
 
     if wedges is not None and _dq.applies(gamma, gamma_rms) and res.stop_reason != "interrupted":
