@@ -42,6 +42,12 @@ recorded in ``DenoiseResult.params``):
    one-ring filter, one-sided at M_E, on the faces away from M_E and the flat sides of its
    creases (:func:`meshrepair.cadfinish.cad_finish_rule`).
 
+Round 9s: on a CAD part the outside weight 6 is lowered to 3 when the normal residual outside C
+exceeds the one in C by more than 3 % (a discrepancy principle, :mod:`meshrepair.discrepancy`;
+the main run is solved again); on an organic mesh with white noise the smooth
+region gets ``round((γ̂/0.13)²)`` Taubin λ|μ pairs before the re-anchoring
+(:mod:`meshrepair.lowpass`).
+
 Throughout: λ = ``clip(0.02 / γ̂², 0.05, 1)``; the Willmore weight ``w`` from ρ for correlated
 noise along the normals (:func:`willmore_weight_from_scale`) and then ``3 max(1, ℓ²)`` V-steps
 per iteration for its correlation length ℓ, the probe included (:func:`inner_iters_from_scale`);
@@ -494,6 +500,22 @@ def _denoise(V, F, *, lam, th, a, robust_iters, feature_iters, mask_update_every
         return res, res.V, res.M_E
 
     res, V_out, M_E = solve(stages)
+    w_cad = info["outside_weight"]  # the CAD-part decision, read by the polish rule below
+    info["discrepancy_ratio"] = float("nan")
+    from . import discrepancy as _dq
+
+    if wedges is not None and _dq.applies(gamma, gamma_rms) and res.stop_reason != "interrupted":
+        # the discrepancy principle on w_out (round 9s): lower it where it smooths away signal
+        q = _dq.discrepancy_ratio(V, V_out, F, sup_v, clip=_dq.CLIP * gamma)
+        info["discrepancy_ratio"] = q
+        for w_try in _dq.FALLBACK_WEIGHTS:
+            if _dq.accept_weight(q):
+                break
+            wedges = np.where(force < 0, ww, ww * w_try) if w_try != 1.0 else None
+            info["outside_weight"] = w_try
+            res, V_out, M_E = solve(stages)
+            q = _dq.discrepancy_ratio(V, V_out, F, sup_v, clip=_dq.CLIP * gamma)
+            log.info("outside weight lowered to %g (discrepancy ratio %.3f)", w_try, q)
     shrink = _volume_ratio(V, V_out, F, report)
     if shrink is not None and shrink < COLLAPSE_VOLUME_RATIO and res.stop_reason != "interrupted":
         if not auto_robust:
@@ -523,7 +545,7 @@ def _denoise(V, F, *, lam, th, a, robust_iters, feature_iters, mask_update_every
                 "has no smooth regions for the model); it cannot be denoised")
     info["polished"] = 0.0
     # the rule reads the automatic decisions only (a user-set Willmore weight is not a finding)
-    pr = polish_rule(max(gamma, gamma_rms), info["outside_weight"],
+    pr = polish_rule(max(gamma, gamma_rms), w_cad,
                      ww if willmore_weight is None else 1.0, info["noise_length"])
     if polish and pr is not None:
         from .polish import polish as _polish
@@ -535,6 +557,15 @@ def _denoise(V, F, *, lam, th, a, robust_iters, feature_iters, mask_update_every
                                           eta=POLISH_ETA if POLISH_DATA else 0.0)
         log.info("polish (%d rings, %.1f deg, %d passes) on %.1f %% of the faces", *pr,
                  100 * info["polished"])
+    info["lowpass_steps"] = 0
+    if sup_v is not None and willmore_weight is None:  # round 9s: organic mesh, white noise
+        from . import lowpass as _lp
+
+        if _lp.applies(info["support_fraction"], ww):
+            k = _lp.steps_from_noise(gamma)
+            nrm = _lp.normal_only(info["tangential_ratio"], gamma)
+            V_out = _lp.taubin_region(V_out, topo.edges, ~sup_v, k, F=F if nrm else None)
+            info["lowpass_steps"] = k
     info.update(reanchor_ratio=float("nan"), reanchored=0, reanchor_shift=0.0)
     if REANCHOR and sup_v is not None:  # before the unfolding: it judges the final positions
         V_out = _reanchor_smooth(V, V_out, F, topo, sup_v, max(gamma, gamma_rms), info)
