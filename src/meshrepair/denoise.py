@@ -5,8 +5,9 @@ recorded in ``DenoiseResult.params``):
 
 0. *Unfold* faces folded over by noise (:func:`meshrepair.relax.untangle`). The unfolded mesh
    is the start of the solves; the fidelity data stays the input, except for impulsive noise
-   (:func:`fidelity_data`). Faces still folded in the result are unfolded the same way at the
-   end (:func:`unfold_result`).
+   (:func:`fidelity_data`), and for the main run only where the probe reads that noise along
+   the normals (:func:`unfolded_data_after_probe`, round 9r). Faces still folded in the
+   result are unfolded the same way at the end (:func:`unfold_result`).
 1. *Probe*: the robust stage below on the whole mesh (MC with ``a = 0.5`` on every edge, a
    total-variation-like smoother of the normals). Its result N¹ decides:
 
@@ -73,6 +74,7 @@ from .denoise_folds import (  # noqa: F401  (re-exported)
     _volume_ratio,
     fidelity_data,
     unfold_result,
+    unfolded_data_after_probe,
 )
 from .denoise_rules import (  # noqa: F401  (re-exported: the rules read from the input)
     CAD_SUPPORT,
@@ -470,6 +472,8 @@ def _denoise(V, F, *, lam, th, a, robust_iters, feature_iters, mask_update_every
             anchor = np.zeros(len(V))
             anchor[topo_w.edges[sup].ravel()] = 1.0
         info["tangential_ratio"] = tr
+        if n_unf and Vd is Vw and not unfolded_data_after_probe(impulsive, tr, float(sup.mean())):
+            Vd, Vi = Vn_w, Vw  # noise with a tangential part: the input is the main run's data
         if lam is None and ww > 1.0:  # correlated noise: λ from its level at its own scale
             lam_used = lambda_from_noise(max(gamma, ns.gamma))
             opts_kw["lam"] = lam_used

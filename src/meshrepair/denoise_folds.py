@@ -27,6 +27,72 @@ def fidelity_data(V_input: np.ndarray, V_unfolded: np.ndarray, impulsive: bool) 
     return V_unfolded if (impulsive and UNFOLD_DATA_IMPULSIVE) else V_input
 
 
+UNFOLD_DATA_TANGENTIAL_MAX = 0.65
+"""Tangential ratio (:func:`meshrepair.scale.tangential_ratio`, the probe's r_t) from which the
+folds of an impulsive-reading input are put down to a tangential part of the noise, not to
+thrown vertices (:func:`unfolded_data_after_probe`); the value is
+:data:`meshrepair.denoise_rules.TANGENTIAL_MAX`, the one threshold that tells noise along the
+normals (r_t 0.08-0.47) from noise with a tangential part (0.83-1.29)."""
+
+UNFOLD_DATA_CAD_SUPPORT = 0.2
+"""The direction reading is trusted on CAD parts only, crease support ≥ 0.2 of the edges
+(:data:`meshrepair.denoise_rules.CAD_SUPPORT`)."""
+
+
+def unfolded_data_after_probe(impulsive: bool, tangential: float,
+                              support_fraction: float = 1.0) -> bool:
+    """Whether the main run keeps the unfolded mesh as its fidelity data, once the probe has
+    read the direction of the noise (round 9r; the probe itself runs on :func:`fidelity_data`):
+
+    .. math:: V^0_{main} = \\begin{cases} V_{input} & \\text{impulsive} \\wedge
+                  |C| / n_E \\ge 0.2 \\wedge r_t \\ge 0.65 \\\\
+                  V^0 \\text{ of } \\texttt{fidelity\\_data} & \\text{otherwise,}
+                  \\end{cases}
+
+    ``r_t`` the probe's :func:`meshrepair.scale.tangential_ratio`, ``|C| / n_E`` the share of
+    the edges in the crease-supported region (:func:`meshrepair.regions.crease_support`).
+    Returns True when the main run keeps the unfolded mesh (``impulsive`` and not the first
+    case).
+
+    Why. The solve's normals follow the data where the prior lets them: the prior of (6)
+    removes the part of the data error ``e = ⟨V⁰ - V*, n⟩`` that varies from vertex to vertex
+    and keeps its smooth part, about ``W² e`` (``W`` the one-ring mean). The unfolding
+    (:func:`meshrepair.relax.untangle`) replaces the input's error at a folded fan by an
+    umbrella average, whose error is smooth over the fan: the curvature and crease rounding
+    of the umbrella step. Whether that pays depends on what folded the fan:
+
+    * vertices thrown along the normals (impulsive noise, ``r_t < 0.65``): the raw error at the
+      moved vertices is large and the unfolding removes about half of it, at a like smooth
+      error (bundled fandisk, 10 % of the vertices thrown 1.0 l: raw 0.57 → 0.33-0.35, ``W² e``
+      0.15-0.16 → 0.16-0.18 mean edge lengths; twelve impulsive 0.52 → 0.26, 0.12 → 0.12);
+    * a tangential part of the noise (``r_t ≥ 0.65``: in-plane moves fold faces without any
+      outlier): the raw error is not reduced (fandisk γ0.3 random 0.18 → 0.17) while its smooth
+      part grows 1.6× (0.046-0.049 → 0.075-0.077; sharp_sphere γ0.3 random 0.048 → 0.091).
+
+    The direction is read on CAD parts only (``|C| / n_E ≥ 0.2``, the test of
+    :func:`meshrepair.denoise_rules.outside_weight`): on organic meshes ``r_t`` also reads
+    curvature left in the probe (rocker_arm γ0.1 normal 1.13) and thrown vertices along the
+    normals read 0.75-1.53 there (nllr_nicolo 0.83, nllr_pierrot 1.53, rocker_arm with 10 %
+    thrown 0.75), whose folds are the first case above (rocker_arm 139.4 → 141.6 without this
+    test). The reading is not perfect on CAD parts either: screwdriver with thrown vertices
+    reads 0.70-0.80 (support 0.26-0.44) and takes the input as data (MSAE 208.4 → 205.9 and
+    108.4 → 108.7).
+
+    Random-direction noise on a CAD part can read impulsive (``γ̂_rms > 1.3 γ̂``: the creases'
+    curvature in the umbrella Laplacian, and the heavier tail of a Gaussian times the cosine of
+    a random direction; fandisk γ0.3 random 1.34), so :func:`fidelity_data` alone gives it the
+    unfolded data. Measured (docs/parameters.md, round 9r): fandisk γ0.3 random MSAE 20.1 →
+    17.0, seeds 2/3/5/6 17.9 / 16.9 / 28.5 / 18.6 → 14.7 / 15.5 / 23.7 / 15.2, sharp_sphere γ0.3
+    random 180.6 → 172.5; rows that do not read impulsive, or whose noise lies along the
+    normals, are unchanged.
+    """
+    if not (impulsive and UNFOLD_DATA_IMPULSIVE):
+        return False
+    if support_fraction < UNFOLD_DATA_CAD_SUPPORT:  # r_t is not read as a direction here
+        return True
+    return bool(tangential < UNFOLD_DATA_TANGENTIAL_MAX)
+
+
 UNFOLD_RESULT = True
 """Faces still folded over in the *result* are unfolded by the same umbrella step as the input,
 cluster by cluster where the unfolded faces agree better with the robust probe's normals
