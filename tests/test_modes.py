@@ -208,3 +208,14 @@ def test_quality_published_kinect_sharpened_creases():
     assert msae(r.V, Vt, F) < 0.92 * msae(Vp, Vt, F)
     assert mean_angle_error(r.V, Vt, F) < mean_angle_error(Vp, Vt, F)
     assert vertex_error(r.V, Vt) < vertex_error(Vp, Vt)
+
+
+def test_rings_kernel_numba_matches_sparse_products():
+    """The breadth-first neighbourhood rows equal the rows of (I + A)^r > 0."""
+    V, F = _fold(14, 30.0)
+    topo = edge_topology(F, len(V))
+    A = _face_adjacency(topo, np.zeros(topo.n_edges, bool)).tocsr()
+    for r, (lo, hi) in ((1, (0, 50)), (4, (20, 200)), (7, (0, len(F)))):
+        p0, i0 = km._np_rings_rows(A.indptr, A.indices, lo, hi, r)
+        p1, i1 = km.rings_rows(A.indptr, A.indices, lo, hi, r)
+        assert np.array_equal(p0, p1) and np.array_equal(i0, i1)
