@@ -17,11 +17,12 @@ on the unit sphere started at ``n_f``,
           W_c(d) = e^{-d^2 / 2σ_c^2},\\; W_s(d) = e^{-d^2 / 2σ_s^2},
 
 ``σ_c = r`` mean edge lengths, ``σ_s = 0.15``, at most 10 iterations (a face stops when a
-step moves its normal by less than 1e-6). Each step is a step of gradient ascent of the kernel density ``p(m) = Σ_g A_g W_c W_s(\\|m - n_g\\|)`` over the
-normals of ``K(f)`` (its value never decreases): a face of a rounded band, whose normal lies in
-the valley between the two planes' peaks, moves to the peak of its side; a face of a plane
-keeps its normal; on a surface whose normals are spread evenly about ``n_f`` (a sphere, a
-cylinder away from its ends) ``m_f ≈ n_f``.
+step moves its normal by less than 1e-6). Each step is a step of gradient ascent of the
+kernel density ``p(m) = Σ_g A_g W_c W_s(\\|m - n_g\\|)`` over the normals of ``K(f)``
+(its value never decreases): a face of a rounded band, whose normal lies in the valley
+between the two planes' peaks, moves towards the peak of its side; a face of a plane keeps
+its normal; on a surface whose normals are spread evenly about ``n_f`` (a sphere, a cylinder
+away from its ends) ``m_f ≈ n_f``.
 
 **Basins.** A face takes its mode only when the modes of its edge neighbours are within
 ``cons`` (10°) of it (it lies inside one basin; the faces straddling a crease keep their
