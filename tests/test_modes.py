@@ -188,11 +188,12 @@ def test_sharpen_is_equivariant():
 
 
 def test_sharpen_rule():
-    """Fires only for correlated noise (w > 1); r = round(10 max(1, ℓ))."""
+    """Fires only for correlated noise (w > 1); r = min(round(10 max(1, ℓ)), 14)."""
     assert rules_mod.sharpen_rule(1.0, 1.41) is None
     assert rules_mod.sharpen_rule(16.0, np.sqrt(2)) == 14
     assert rules_mod.sharpen_rule(4.0, 0.0) == 10
     assert rules_mod.sharpen_rule(4.0, float("nan")) == 10
+    assert rules_mod.sharpen_rule(16.0, np.sqrt(3)) == 14
 
 
 @pytest.mark.shared
