@@ -261,6 +261,10 @@ def _organic_finish(V_in, V_out, F, topo, M_E, gamma, impulsive, ww, info):
     level = residual_level(V_out, V_in, F) / max(gamma, 1e-12)
     info["residual_level_ratio"] = level
     k = reintegrate_rule(p, reanchored, impulsive, ratio, gamma, level)
+    from .organic_fidelity import reintegrate_allowed
+
+    if not reintegrate_allowed(info["tangential_ratio"], impulsive):  # round 10l
+        k = 0
     if k:  # then one more guidance pass with half the steps (REINTEGRATE_POST_STEPS)
         X = reintegrate(V_out, V_in, F, X, steps=k)
         X = guidance_filter(X, F, M_E, topo, passes=1, steps=REINTEGRATE_POST_STEPS)
@@ -485,6 +489,11 @@ def _denoise(V, F, *, lam, th, a, robust_iters, feature_iters, mask_update_every
         if w_out != 1.0:  # a CAD part: its smooth patches get the stronger smooth prior
             wedges = np.where(sup, ww, ww * w_out)
         info["outside_weight"] = w_out
+        from . import organic_fidelity as _of
+
+        if lam is None and _of.applies(float(sup.mean()), ww, w_out, impulsive, ns.rho):
+            lam_used = _of.organic_lambda(gamma, tr)  # round 10l: the uncapped data weight
+            opts_kw["lam"] = lam_used
         info.update(support_fraction=float(sup.mean()), willmore_weight=ww,
                     noise_rho=ns.rho, noise_length=ns.length, noise_gamma_scale=ns.gamma)
         log.info("crease support on %.1f %% of the edges; noise correlation %.2f (length %.1f, "
