@@ -27,8 +27,23 @@ away from its ends) ``m_f ≈ n_f``.
 **Basins.** A face takes its mode only when the modes of its edge neighbours are within
 ``cons`` (10°) of it (it lies inside one basin; the faces straddling a crease keep their
 normals) and it is more than 2 rings from the mesh border (one-sided neighbourhoods). The
-vertices then move to the target normals by the Sun et al. steps of :mod:`meshrepair.polish`
-(20 per pass), ``passes`` passes: the candidate ``X``.
+vertices then move to the target normals ``n'`` by the forward-backward steps of
+:mod:`meshrepair.polish_fidelity` (a Sun et al. step, then the proximal map of the data term),
+30 per pass, ``passes`` passes: the candidate ``X`` descends
+
+.. math:: E_s(x) = \\sum_f \\sum_{i \\in f} \\big(n'_f \\cdot (x_i - c_f)\\big)^2
+          + \\frac{η_s}{2} \\sum_i \\|x_i - V^0_i\\|^2, \\qquad η_s = 0.007,
+
+the energy the polish of round 9b descends (``η = 0.002``, 300 steps) with the modes as the
+target normals. *Like with like*: the polish's data term pulls the result ``V`` towards the
+data, and a candidate
+built by plain Sun steps (``η_s = 0``, round 9k as first written) loses that pull: it was
+farther from ``V⁰`` (Σ‖V⁰ − X‖² = 814 against 748 squared edge lengths on the real Kinect
+pyramid, and on every patch down to 2 edge lengths) although its normals were better (E_a
+5.89° against 6.91°), so the data test refused it everywhere. With the data term in
+the candidate's own step both sides of the test carry the same pull; ``η_s`` is larger than
+the polish's because the candidate has 60 steps, not 300 (docs/parameters.md, round 9k on
+the merge with round 9b).
 
 **Data test.** ``X`` is kept per connected set ``S`` (through mesh edges) of the vertices it
 moves by more than ``eps`` mean edge lengths, when it lowers the fidelity there,
@@ -38,8 +53,11 @@ moves by more than ``eps`` mean edge lengths, when it lowers the fidelity there,
 ``V⁰`` the input, ``V`` the result before this step. A rounded crease lies off the data (the
 prior pulled it inwards), its sharpened version lies on it; a smooth surface that the mean
 shift would facet lies on the data already and its facets leave it, so they are refused:
-synthetic Kinect-like noise on bunny and fandisk keeps the result unchanged, the real Kinect
-pyramid keeps 78 % of the moved vertices.
+synthetic Kinect-like noise on bunny keeps the result unchanged, the real Kinect pyramid
+keeps 77 % of its vertices (synthetic fandisk 68 %). The test reads
+``ρ_S = ⟨X − V, V⁰ − V⟩_S / ‖X − V‖²_S > 1/2``; the Kinect's large set passes at
+``ρ = 0.500``, a thin margin (docs/parameters.md): where it fails the result is the
+unsharpened one, never worse.
 """
 
 from __future__ import annotations
@@ -56,6 +74,11 @@ MODE_CONSISTENCY = 10.0
 MODE_BORDER_RINGS = 2
 MODE_PASSES = 2
 MODE_EPS = 0.01
+MODE_ETA = 0.007
+"""``η_s``: the data weight of the candidate's vertex step (forward-backward steps of
+:mod:`meshrepair.polish_fidelity`, on the merge with round 9b; module docstring)."""
+MODE_VSTEPS = 30
+"""Vertex steps per pass of the candidate."""
 MODE_CHUNK = 20_000
 """Rows of the neighbourhood built and shifted at a time (memory ≈ chunk × |K(f)| indices)."""
 
@@ -138,7 +161,7 @@ def supported_by_data(V0: np.ndarray, V: np.ndarray, X: np.ndarray, edges: np.nd
 
 def sharpen(V: np.ndarray, V0: np.ndarray, F: np.ndarray, sharp: np.ndarray, topo, *,
             rings: int, passes: int = MODE_PASSES, sigma_s: float = MODE_SIGMA_S,
-            cons: float = MODE_CONSISTENCY, eps: float = MODE_EPS
+            cons: float = MODE_CONSISTENCY, eps: float = MODE_EPS, eta: float = MODE_ETA
             ) -> tuple[np.ndarray, float]:
     """The step of the module docstring.
 
@@ -152,16 +175,19 @@ def sharpen(V: np.ndarray, V0: np.ndarray, F: np.ndarray, sharp: np.ndarray, top
     rings : ``r`` of ``K(f)``
     passes, sigma_s, cons : see the module docstring
     eps : the data test's motion threshold, mean edge lengths
+    eta : float >= 0, the candidate's data weight per vertex step ``η_s`` (0: plain Sun steps,
+        round 9k as first written)
 
     Returns
     -------
     V : (nV, 3) float64, a new array
     kept : float, the fraction of the vertices the step moved
     """
-    from .polish import vertex_update
+    from .polish_fidelity import vertex_update_with_data
 
     F = np.asarray(F, dtype=np.int64)
     V = np.asarray(V, dtype=np.float64)
+    V0 = np.asarray(V0, dtype=np.float64)
     e = topo.edges
     le = float(np.linalg.norm(V[e[:, 0]] - V[e[:, 1]], axis=1).mean())
     A = _face_adjacency(topo, sharp)
@@ -178,8 +204,9 @@ def sharpen(V: np.ndarray, V0: np.ndarray, F: np.ndarray, sharp: np.ndarray, top
         M = mode_normals(X, F, A, rings, sigma_c=rings * le, sigma_s=sigma_s, chunks=chunks)
         N, _, _ = _normals_areas(X, F)
         take = basin_gate(M, A1, ~near, cons)
-        X = vertex_update(X, F, np.where(take[:, None], M, N))
-    keep = supported_by_data(np.asarray(V0, dtype=np.float64), V, X, e, eps * le)
+        X = vertex_update_with_data(X, F, np.where(take[:, None], M, N), V0, eta=eta,
+                                    steps=MODE_VSTEPS)
+    keep = supported_by_data(V0, V, X, e, eps * le)
     out = V.copy()
     out[keep] = X[keep]
     return out, float(keep.mean())
