@@ -51,7 +51,8 @@ region gets ``round((γ̂/0.13)²)`` Taubin λ|μ pairs before the re-anchoring
 Round 10h: heavy white noise on an organic mesh (total level ``γ̂ √(1 + 2 min(r_t, 1)²) > 0.32``
 after the probe) is low-passed first: ``round((γ̂ √(1 + min(r_t, 1)²) / 0.044)²)`` (≤ 96)
 Taubin λ|μ pairs on the input, then the whole schedule above runs on the low-passed mesh
-(:mod:`meshrepair.presmooth`; ``params['presmooth_steps']``).
+(:mod:`meshrepair.presmooth`; ``params['presmooth_steps']``). The run on the low-passed mesh
+is not polished.
 
 Throughout: λ = ``clip(0.02 / γ̂², 0.05, 1)``; the Willmore weight ``w`` from ρ for correlated
 noise along the normals (:func:`willmore_weight_from_scale`) and then ``3 max(1, ℓ²)`` V-steps
@@ -505,7 +506,8 @@ def _denoise(V, F, *, lam, th, a, robust_iters, feature_iters, mask_update_every
                          inner_solver=inner_solver,
                          inner_iters=None if auto_inner else inner_iters, n_solver=n_solver,
                          stages=None, huber_delta=huber_delta, willmore_weight=None,
-                         regions=regions, callback=callback, polish=polish, presmoothed=True)
+                         regions=regions, callback=callback, polish=False,  # 10h: not polished
+                         presmoothed=True)
             r.params.update(presmooth_steps=kp, presmooth_noise_estimate=r.noise_estimate,
                             presmooth_tangential_ratio=info["tangential_ratio"])
             r.noise_estimate = gamma
