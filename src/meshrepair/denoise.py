@@ -52,6 +52,12 @@ the main run is solved again); on an organic mesh with white noise the smooth
 region gets ``round((γ̂/0.13)²)`` Taubin λ|μ pairs before the re-anchoring
 (:mod:`meshrepair.lowpass`).
 
+Round 10h: heavy white noise on an organic mesh (total level ``γ̂ √(1 + 2 min(r_t, 1)²) > 0.32``
+after the probe) is low-passed first: ``round((γ̂ √(1 + min(r_t, 1)²) / 0.044)²)`` (≤ 96)
+Taubin λ|μ pairs on the input, then the whole schedule above runs on the low-passed mesh
+(:mod:`meshrepair.presmooth`; ``params['presmooth_steps']``). The run on the low-passed mesh
+is not polished.
+
 Throughout: λ = ``clip(0.02 / γ̂², 0.05, 1)``; the Willmore weight ``w`` from ρ for correlated
 noise along the normals (:func:`willmore_weight_from_scale`) and then ``3 max(1, ℓ²)`` V-steps
 per iteration for its correlation length ℓ, the probe included (:func:`inner_iters_from_scale`);
@@ -371,7 +377,8 @@ def denoise(
 
 def _denoise(V, F, *, lam, th, a, robust_iters, feature_iters, mask_update_every,
              min_feature_edges, tol, unfold, inner_solver, inner_iters, n_solver, stages,
-             huber_delta, willmore_weight, regions, callback, polish=True) -> DenoiseResult:
+             huber_delta, willmore_weight, regions, callback, polish=True,
+             presmoothed: bool = False) -> DenoiseResult:
     from .options import check_bool, check_int, check_number
     from .validate import _check_mesh
 
@@ -500,6 +507,29 @@ def _denoise(V, F, *, lam, th, a, robust_iters, feature_iters, mask_update_every
                  "level %.3f); willmore weight %g", 100 * sup.mean(), ns.rho, ns.length,
                  ns.gamma, ww)
 
+    if sup_v is not None and willmore_weight is None and lam is None and not presmoothed:
+        from .presmooth import presmooth, presmooth_steps  # round 10h: heavy organic noise
+
+        kp = presmooth_steps(gamma, info["tangential_ratio"],
+                             support_fraction=info["support_fraction"],
+                             outside=info["outside_weight"], willmore=ww, impulsive=impulsive)
+        if kp:  # coarse-to-fine: the whole model runs again on the low-passed input
+            log.info("heavy noise on an organic mesh: %d Taubin pairs on the input first", kp)
+            Vp = presmooth(V, topo.edges, np.ones(len(V), bool), kp)  # every vertex (10h)
+            r = _denoise(Vp, F, lam=lam, th=th, a=a,
+                         robust_iters=None if auto_robust else robust_iters,
+                         feature_iters=feature_iters, mask_update_every=mask_update_every,
+                         min_feature_edges=min_feature_edges, tol=tol, unfold=unfold,
+                         inner_solver=inner_solver,
+                         inner_iters=None if auto_inner else inner_iters, n_solver=n_solver,
+                         stages=None, huber_delta=huber_delta, willmore_weight=None,
+                         regions=regions, callback=callback, polish=False,  # 10h: not polished
+                         presmoothed=True)
+            r.params.update(presmooth_steps=kp, presmooth_noise_estimate=r.noise_estimate,
+                            presmooth_tangential_ratio=info["tangential_ratio"])
+            r.noise_estimate = gamma
+            return r
+    info["presmooth_steps"] = 0
     Vi_main = Vi  # impulsive noise on a CAD part: the main run starts from the probe
     warm = r1_V is not None and warm_start_from_probe(impulsive, info["outside_weight"], gamma)
     if warm:
