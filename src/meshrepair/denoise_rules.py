@@ -249,19 +249,13 @@ REINTEGRATE_STEPS_PER_GAMMA = 18.0
 REINTEGRATE_LEVEL = 0.7
 
 
-REINTEGRATE_RATIO_MAX = 0.3
-"""Ceiling on ρ_t^after of :func:`reintegrate_rule` (round 10s): above it the tangential
-offset of the input from the re-anchored result is the input's own tangential noise, which the
-re-integration would put back (docs/parameters.md, round 10s)."""
-
-
 def reintegrate_rule(passes: int, reanchored: bool, impulsive: bool, ratio_after: float,
                      gamma: float, level_ratio: float = 1.0) -> int:
     """Sun et al. steps ``k`` of the re-integration from the input (:mod:`meshrepair.organic`),
     0 for none:
 
     .. math:: k = \\max(2, \\mathrm{round}(18\\, γ̂)) \\quad\\text{when}\\quad p > 0 \\wedge
-              \\text{re-anchored} \\wedge q \\ge 0.7 \\wedge ρ_t^{after} \\le 0.3 \\wedge
+              \\text{re-anchored} \\wedge q \\ge 0.7 \\wedge
               (\\text{impulsive} \\vee ρ_t^{after} > 0.16),
 
     on the meshes the guidance filter runs on (``p > 0``, :func:`guidance_rule`), whose
@@ -284,23 +278,8 @@ def reintegrate_rule(passes: int, reanchored: bool, impulsive: bool, ratio_after
     of :mod:`meshrepair.organic`), and more noise needs more of them (γ̂ ≈ 0.09 → 2 on the
     impulsive nllr_nicolo and pierrot, 0.27 → 5 on igea).
     Measured in docs/parameters.md (round 9).
-
-    **Ceiling** ``ρ_t^after ≤ 0.3`` (:data:`REINTEGRATE_RATIO_MAX`, round 10s). The steps move
-    each vertex along the target normals only, so the result keeps the input's tangential
-    offset ``t_i = P_i(V⁰_i − V_i)`` from the re-anchored result. ``ρ_t^after`` is
-    ``rms‖t‖ / rms⟨V⁰ − V, n⟩``; for noise along the normals that the solve removed ``t`` is
-    the result's own drift (0.14-0.19 on the NLLR inputs), for noise with a tangential part it
-    is the input's tangential noise, at least about half its normal part after the
-    re-anchoring took what it could (fandisk γ0.3 random seeds 4, 7, 8: 0.47-0.52). On a flat
-    patch the target normals are all equal and a Sun step cannot move a vertex in the plane:
-    every face the tangential noise folded over stays folded (fandisk seed 4: 81 folded in the
-    input, 84 after the steps, none in the result before them), each a 180° error, MSAE
-    12.7 → 193.5. Above the ceiling the guidance result is kept (the threshold is about the
-    geometric mean of 0.19 and 0.47).
     """
     if passes <= 0 or not reanchored or not level_ratio >= REINTEGRATE_LEVEL:
-        return 0
-    if not ratio_after <= REINTEGRATE_RATIO_MAX:
         return 0
     if not (impulsive or ratio_after > REINTEGRATE_RATIO):
         return 0
