@@ -32,8 +32,7 @@ DIRECTIONS = ("normal", "random")
 SEEDS = tuple(range(1, 9))
 KEYS = ("impulsive", "support_fraction", "tangential_ratio", "reanchored",
         "reanchor_ratio_after", "residual_level_ratio", "guidance_passes", "reintegrate_steps",
-        "reintegrate_rejected",
-        "result_folds_unfolded")
+        "reintegrate_rejected", "result_folds_unfolded")
 
 
 def run(meshes, gammas, directions, seeds) -> list[dict]:
