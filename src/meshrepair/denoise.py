@@ -29,6 +29,9 @@ recorded in ``DenoiseResult.params``):
    normal filter bounded by the converged M_E on the flat patches, at the noise's scale, then
    the vertices to the filtered normals, keeping the solve's data term
    (:mod:`meshrepair.polish`, :mod:`meshrepair.polish_fidelity`).
+4b. *Crease sharpening* (correlated noise, :func:`sharpen_rule`): mode-seeking face normals at
+   the noise's scale, kept per connected region where they bring the result closer to the
+   input (:mod:`meshrepair.modes`); it runs after the re-anchoring of step 5.
 5. *Tangential re-anchoring* of the smooth region (:mod:`meshrepair.reproject`): outside C the
    result's vertices slide along the result surface towards the closest points of the input's
    vertices, ``V_i + w_i (π_S(V⁰_i) - V_i)`` with the least-variance weights
@@ -101,6 +104,7 @@ from .denoise_rules import (  # noqa: F401  (re-exported: the rules read from th
     reintegrate_rule,
     robust_a_from_noise,
     robust_iters_from_noise,
+    sharpen_rule,
     warm_start_from_probe,
     willmore_weight_from_scale,
 )
@@ -259,6 +263,10 @@ def _organic_finish(V_in, V_out, F, topo, M_E, gamma, impulsive, ww, info):
     level = residual_level(V_out, V_in, F) / max(gamma, 1e-12)
     info["residual_level_ratio"] = level
     k = reintegrate_rule(p, reanchored, impulsive, ratio, gamma, level)
+    from .organic_fidelity import reintegrate_allowed
+
+    if not reintegrate_allowed(info["tangential_ratio"], impulsive):  # round 10l
+        k = 0
     if k:  # then one more guidance pass with half the steps (REINTEGRATE_POST_STEPS)
         from .denoise_folds import reintegration_keeps
         from .relax import locally_flipped_faces as _folded
@@ -491,6 +499,11 @@ def _denoise(V, F, *, lam, th, a, robust_iters, feature_iters, mask_update_every
         if w_out != 1.0:  # a CAD part: its smooth patches get the stronger smooth prior
             wedges = np.where(sup, ww, ww * w_out)
         info["outside_weight"] = w_out
+        from . import organic_fidelity as _of
+
+        if lam is None and _of.applies(float(sup.mean()), ww, w_out, impulsive, ns.rho):
+            lam_used = _of.organic_lambda(gamma, tr)  # round 10l: the uncapped data weight
+            opts_kw["lam"] = lam_used
         info.update(support_fraction=float(sup.mean()), willmore_weight=ww,
                     noise_rho=ns.rho, noise_length=ns.length, noise_gamma_scale=ns.gamma)
         log.info("crease support on %.1f %% of the edges; noise correlation %.2f (length %.1f, "
@@ -595,6 +608,14 @@ def _denoise(V, F, *, lam, th, a, robust_iters, feature_iters, mask_update_every
         if pc:
             V_out, info["cad_finish_gated"] = cad_finish(V_out, F, M_E, topo, passes=pc)
             info["cad_finish_passes"] = pc
+    info["sharpened"] = 0.0
+    sr = sharpen_rule(ww if willmore_weight is None else 1.0, info["noise_length"])
+    if polish and sr is not None:  # correlated noise: rounded creases, kept where data agree
+        from .modes import sharpen
+
+        V_out, info["sharpened"] = sharpen(V_out, V, F, M_E, topo, rings=sr)
+        log.info("crease sharpening (%d rings) kept on %.1f %% of the vertices", sr,
+                 100 * info["sharpened"])
     n_res_folded = 0
     if unfold and UNFOLD_RESULT and not (info["reintegrate_steps"] and REINTEGRATE_KEEPS_FOLDS
                                            and not impulsive):

@@ -1,0 +1,89 @@
+"""The data weight of smooth organic meshes at low noise, and the input's tangential layout
+(issue 12, round 10l).
+
+**Fidelity weight.** The default weight of the data term of energy (6),
+:func:`meshrepair.denoise_rules.lambda_from_noise`, is ``λ = clip(0.02 / γ̂², 0.05, 1)``. The
+term ``(λ/2)‖V − V⁰‖²`` is the negative log-likelihood of white Gaussian noise of level ``γ̂``
+(mean edge lengths) up to the prior's scale, so the weight grows as ``1/γ̂²`` (for a quadratic
+prior and a signal whose spectrum is the prior's inverse, ``λ = c/σ²`` is exactly the Wiener
+filter: tests/test_organic_fidelity.py); the upper cap ``λ ≤ 1`` (reached at ``γ̂ ≈ 0.14``)
+was set on CAD parts. On a smooth organic surface at low noise the capped weight lets the
+edge-Willmore prior flatten relief the noise did not hide (nicolo γ0.1 normal: MSAE 52.9 with
+λ = 1, 45.1 with λ = 4.7; docs/parameters.md, round 10l). On meshes that are not CAD parts
+(crease support below :data:`meshrepair.denoise_rules.CAD_SUPPORT` of the edges), with white
+(Willmore weight 1 and correlation ratio ``ρ <`` :data:`RHO_WHITE`), non-impulsive noise, the
+main run uses the law without the cap,
+
+.. math:: λ = \\mathrm{clip}(c / γ̂^2,\\; 0.05,\\; λ_{max}), \\qquad λ_{max} = 8, \\qquad
+          c = \\begin{cases} 0.02 & r_t < 0.65 \\\\ 0.04 & r_t \\ge 0.65, \\end{cases}
+
+(:func:`organic_lambda`), which for noise along the normals equals the default where
+``γ̂ ≥ 0.1414``. ``γ̂`` is a level of the offsets *along the normals*; noise with a tangential
+part (``r_t ≥`` :data:`meshrepair.denoise_rules.TANGENTIAL_MAX`,
+:func:`meshrepair.scale.tangential_ratio`) puts part of its variance where the prior does not
+act (the tangential layout), and the design rows want the double weight there (rocker_arm γ0.3
+random 64.1 → 60.8, nicolo γ0.3 random 65.2 → 63.6 with ``c = 0.04``). The robust probe that
+decides the crease support keeps the default: its decisions do not change.
+Correlated noise that the Willmore rule misses (it reads ``r_t ≥ 0.65``) reads ``ρ ≥ 1.42``
+on the held-out correlated rows, white noise ``ρ ≤ 1.36``: hence :data:`RHO_WHITE` = 1.4 (a
+larger λ keeps correlated bumps: rocker_arm correlated m=4 370.5 → 386.5 without this test).
+
+**Input layout.** The re-integration from the input of :mod:`meshrepair.organic` restarts from
+the input's *tangential* positions (NLLR's vertex update): right when the noise lies along the
+normals, wrong when the noise has a tangential part of its own. With the stronger data weight
+the solve's result stays closer to the input, its residual reads more normal, and the
+re-anchoring and then the re-integration can fire on random-direction noise (nicolo γ0.1
+random: 57.0 with it at λ = 3, 42.8 without). :func:`reintegrate_allowed` keeps it off when the
+input's own tangential ratio (:func:`meshrepair.scale.tangential_ratio`, read on the probe)
+says the noise is not along the normals, ``r_t ≥`` :data:`meshrepair.denoise_rules
+.TANGENTIAL_MAX`, unless the noise is impulsive (the thrown vertices are what the
+re-integration is for).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+ORGANIC_FIDELITY = True
+LAMBDA_SCALE = 0.02
+LAMBDA_SCALE_TANGENTIAL = 0.04
+LAMBDA_MAX = 8.0
+RHO_WHITE = 1.4
+
+
+def organic_lambda(gamma: float, tangential: float = 0.0, *,
+                   lam_max: float | None = None) -> float:
+    """``λ = clip(c / γ̂², 0.05, λ_max)`` (module docstring); ``γ̂`` in mean edge lengths,
+    ``c = 0.02`` for noise along the normals (``r_t < 0.65``), ``c = 0.04`` otherwise.
+    A non-finite or non-positive ``γ̂`` (a clean mesh) returns ``λ_max``."""
+    from .denoise_rules import TANGENTIAL_MAX
+
+    cap = LAMBDA_MAX if lam_max is None else float(lam_max)
+    if not np.isfinite(gamma) or gamma <= 0:
+        return cap
+    c = LAMBDA_SCALE if tangential < TANGENTIAL_MAX else LAMBDA_SCALE_TANGENTIAL
+    return float(np.clip(c / float(gamma) ** 2, 0.05, cap))
+
+
+def applies(support_fraction: float, willmore: float, outside: float, impulsive: bool,
+            rho: float) -> bool:
+    """The gate of :func:`organic_lambda`: a mesh that is not a CAD part (crease support below
+    :data:`meshrepair.denoise_rules.CAD_SUPPORT`), white noise (Willmore weight 1 *and* the
+    correlation ratio ρ of :func:`meshrepair.scale.noise_scale` below :data:`RHO_WHITE`), the
+    outside weight not raised (``w_out = 1``) and noise that is not impulsive."""
+    from .denoise_rules import CAD_SUPPORT
+
+    return bool(ORGANIC_FIDELITY and np.isfinite(support_fraction)
+                and support_fraction < CAD_SUPPORT and willmore == 1.0 and outside == 1.0
+                and not impulsive and np.isfinite(rho) and rho < RHO_WHITE)
+
+
+def reintegrate_allowed(tangential: float, impulsive: bool) -> bool:
+    """Whether the re-integration from the input may run: the input's noise lies along the
+    normals (``r_t <`` :data:`meshrepair.denoise_rules.TANGENTIAL_MAX`) or is impulsive. An
+    unknown ratio (no probe) allows it (the earlier behaviour)."""
+    from .denoise_rules import TANGENTIAL_MAX
+
+    if not ORGANIC_FIDELITY or impulsive or not np.isfinite(tangential):
+        return True
+    return bool(tangential < TANGENTIAL_MAX)
