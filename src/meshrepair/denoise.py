@@ -42,6 +42,8 @@ recorded in ``DenoiseResult.params``):
    bounded by M_E with Sun et al. vertex steps; then, for impulsive noise or a tangential drift
    the re-anchoring left (:func:`reintegrate_rule`), the vertices re-integrated from the input
    by a few Sun et al. steps towards those normals.
+   Round 10s: a re-integration that folds faces its target does not have, where the input's
+   tangential offset is large, is not kept (:func:`meshrepair.denoise_folds.reintegration_keeps`).
 7. *CAD finish* (round 9c, :mod:`meshrepair.cadfinish`) on CAD parts with white noise: the same
    one-ring filter, one-sided at M_E, on the faces away from M_E and the flat sides of its
    creases (:func:`meshrepair.cadfinish.cad_finish_rule`).
@@ -272,9 +274,17 @@ def _organic_finish(V_in, V_out, F, topo, M_E, gamma, impulsive, ww, info):
     if not reintegrate_allowed(info["tangential_ratio"], impulsive):  # round 10l
         k = 0
     if k:  # then one more guidance pass with half the steps (REINTEGRATE_POST_STEPS)
-        X = reintegrate(V_out, V_in, F, X, steps=k)
-        X = guidance_filter(X, F, M_E, topo, passes=1, steps=REINTEGRATE_POST_STEPS)
-        info["reintegrate_steps"] = k
+        from .denoise_folds import reintegration_keeps
+        from .relax import locally_flipped_faces as _folded
+
+        Xr = reintegrate(V_out, V_in, F, X, steps=k)
+        nr, ng = int(_folded(Xr, topo).sum()), int(_folded(X, topo).sum())
+        if reintegration_keeps(ratio, nr, ng):  # round 10s: no in-plane folds put back
+            X = guidance_filter(Xr, F, M_E, topo, passes=1, steps=REINTEGRATE_POST_STEPS)
+            info["reintegrate_steps"] = k
+        else:
+            info["reintegrate_rejected"] = nr - ng
+            log.info("re-integration not kept: %d more folded faces than its target", nr - ng)
     log.info("organic finish: %d guidance passes, %d re-integration steps (ratio %.2f)",
              p, k, ratio)
     return X
@@ -617,7 +627,7 @@ def _denoise(V, F, *, lam, th, a, robust_iters, feature_iters, mask_update_every
     if REANCHOR and sup_v is not None:  # before the unfolding: it judges the final positions
         V_out = _reanchor_smooth(V, V_out, F, topo, sup_v, max(gamma, gamma_rms), info)
     info.update(guidance_passes=0, reintegrate_steps=0, reanchor_ratio_after=float("nan"),
-                residual_level_ratio=float("nan"))
+                residual_level_ratio=float("nan"), reintegrate_rejected=0)
     if sup_v is not None and willmore_weight is None:  # organic finish (round 9)
         V_out = _organic_finish(V, V_out, F, topo, M_E, gamma, impulsive, ww, info)
     info.update(cad_finish_passes=0, cad_finish_gated=0.0)
