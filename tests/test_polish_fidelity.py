@@ -19,6 +19,7 @@ from meshrepair.topology import edge_topology
 from .conftest import published_triple
 
 denoise_mod = importlib.import_module("meshrepair.denoise")
+finish_mod = importlib.import_module("meshrepair.denoise_finish")
 
 
 def _plane(n=12):
@@ -128,7 +129,7 @@ def test_box_heavy_noise_polish_with_data(monkeypatch):
     Vn = add_noise(V, F, 0.6, seed=3)
     r = denoise(Vn, F)
     assert r.params["polished"] > 0
-    monkeypatch.setattr(denoise_mod, "POLISH_DATA", False)
+    monkeypatch.setattr(finish_mod, "POLISH_DATA", False)
     r0 = denoise(Vn, F)
     assert msae(r.V, V, F) < 0.92 * msae(r0.V, V, F)
     assert vertex_error(r.V, V) < 0.9 * vertex_error(r0.V, V)

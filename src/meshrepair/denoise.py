@@ -72,11 +72,17 @@ from __future__ import annotations
 
 import logging
 from collections.abc import Callable
-from dataclasses import dataclass, field, replace
+from dataclasses import replace
 
 import numpy as np
 
 from ._memory import heap_allocations
+from .denoise_finish import (  # noqa: F401  (re-exported)
+    POLISH_DATA,
+    REANCHOR,
+    REINTEGRATE_KEEPS_FOLDS,
+    finish_result,
+)
 from .denoise_folds import (  # noqa: F401  (re-exported)
     COLLAPSE_VOLUME_RATIO,
     UNFOLD_DATA_IMPULSIVE,
@@ -87,6 +93,7 @@ from .denoise_folds import (  # noqa: F401  (re-exported)
     unfold_result,
     unfolded_data_after_probe,
 )
+from .denoise_result import DenoiseResult
 from .denoise_rules import (  # noqa: F401  (re-exported: the rules read from the input)
     CAD_SUPPORT,
     CAD_WILLMORE,
@@ -118,51 +125,11 @@ from .errors import MeshRepairError
 from .noise import noise_statistics
 from .regions import crease_support, flat_edges
 from .relax import untangle
+from .reorder import _edge_values_to, locality_order  # noqa: F401  (re-exported)
 from .scale import noise_scale, tangential_ratio
 from .solver import ADMMSolver, SolverOptions, Stage
 
 log = logging.getLogger(__name__)
-
-
-@dataclass
-class DenoiseResult:
-    """Result of :func:`denoise`.
-
-    Attributes
-    ----------
-    V : (nV, 3) float64, denoised vertices (same order as the input)
-    F : (nF, 3) int64, the input connectivity
-    M_E : (nE,) bool, the sharp-edge mask of the last stage
-    edges : (nE, 2) int64, the edges M_E refers to
-    M_V : (nV,) float64, the fidelity mask used
-    history : list of dict, one per ADMM iteration (energy, rel_change, res_t, res_N, time, ...)
-    iterations : int
-    stop_reason : str
-    noise_estimate : float, γ̂ of the input in mean edge lengths
-    params : dict, the parameters actually used
-    n_unfolded : int, faces folded over in the input that were unfolded before the solve
-        (``params["result_folds_unfolded"]``: faces folded in the solve's result, unfolded
-        after it)
-    """
-
-    V: np.ndarray
-    F: np.ndarray
-    M_E: np.ndarray
-    edges: np.ndarray
-    M_V: np.ndarray
-    history: list[dict] = field(default_factory=list)
-    iterations: int = 0
-    stop_reason: str = ""
-    noise_estimate: float = float("nan")
-    params: dict = field(default_factory=dict)
-    n_unfolded: int = 0
-
-    @property
-    def mesh(self):
-        """The result as a ``trimesh.Trimesh`` (no processing, same vertex order)."""
-        import trimesh
-
-        return trimesh.Trimesh(self.V, self.F, process=False)
 
 
 REORDER_MIN_VERTICES = 200_000
@@ -170,124 +137,6 @@ REORDER_MIN_VERTICES = 200_000
 is memory-bound there, and the reordering measured 1.33 s instead of 1.76 s per iteration on a
 1.18M-vertex subdivided mesh. Smaller meshes keep their order (results then do not depend on a
 coordinate-dependent ordering, which keeps the rotation test exact to rounding)."""
-
-
-def locality_order(V: np.ndarray, F: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Vertex and face permutations along a Morton (Z-order) curve.
-
-    Returns
-    -------
-    pv : (nV,) int64, new vertex i is old vertex ``pv[i]``
-    pf : (nF,) int64, order of the faces (in the renumbered mesh)
-    """
-    from ._kernels import morton
-
-    pv = np.argsort(morton(V), kind="stable")
-    inv = np.empty_like(pv)
-    inv[pv] = np.arange(len(pv))
-    pf = np.argsort(morton(V[pv][inv[F]].mean(axis=1)), kind="stable")
-    return pv, pf
-
-
-def _edge_values_to(topo, topo_w, pf: np.ndarray, values: np.ndarray) -> np.ndarray:
-    """Re-index per-edge ``values`` of the reordered mesh ``topo_w`` (its face m is face
-    ``pf[m]`` of ``topo``, corners in the same order) onto ``topo.edges``, through the face-edge
-    tables (edge k of a face joins its corners k and k + 1): two gathers instead of a search."""
-    out = np.zeros(topo.n_edges, dtype=values.dtype)
-    out[topo.face_edges[pf]] = values[topo_w.face_edges]
-    return out
-
-
-POLISH_DATA = True
-"""The polish's vertex step keeps the fidelity to the solve's data (round 9b,
-:mod:`meshrepair.polish_fidelity`): gcn_fandisk_n6 MSAE 51.5 -> 46.5, E_a 4.17 -> 3.94°."""
-
-REANCHOR = True
-REANCHOR_MAX_RATIO = 0.6
-"""Tangential re-anchoring of the smooth region after the solve (:mod:`meshrepair.reproject`):
-the result's vertices outside the crease-supported region slide along the result surface
-towards the input's closest points, with the minimum-variance weights of
-:func:`meshrepair.reproject.blend_weights`, when the residual tangential ratio
-:func:`meshrepair.reproject.residual_tangential_ratio` reads noise along the normals
-(``ρ_t < 0.6``) and the noise is not heavy (``γ̂ ≤ HEAVY_NOISE``). It runs before
-:func:`unfold_result`, whose probe check then judges the final positions. Measured in
-docs/parameters.md (issue 12, round 5): nllr_igea MSAE 230.7 → 222.4, E_V ratio 1.58 → 1.13;
-nllr_nicolo E_V 1.22 → 1.07; every CAD row within ±0.2 %. Round 6: the targets are smoothed
-tangentially (:func:`meshrepair.reproject.tangential_smooth`, the displacement from the input):
-igea 222.4 → 218.8, E_V ratio 1.13 → 1.11, every hold-out row within +0.4 %."""
-
-
-def _reanchor_smooth(V_in, V_out, F, topo, sup_v, gamma, info):
-    """:data:`REANCHOR` on the vertices outside ``sup_v``; records its decision in ``info``."""
-    from .reproject import reanchor, residual_tangential_ratio
-
-    ratio = residual_tangential_ratio(V_out, V_in, F)
-    info["reanchor_ratio"] = ratio
-    if not (ratio < REANCHOR_MAX_RATIO) or gamma > HEAVY_NOISE:
-        return V_out
-    V_new, w = reanchor(V_out, V_in, F, ~sup_v, topo=topo)
-    info["reanchored"] = int((w > 0).sum())
-    el = float(np.linalg.norm(V_in[topo.edges[:, 0]] - V_in[topo.edges[:, 1]], axis=1).mean())
-    shift = np.sqrt(np.mean(np.sum((V_new - V_out) ** 2, axis=1)))
-    info["reanchor_shift"] = float(shift / el) if el > 0 else 0.0  # mean edge lengths
-    log.info("re-anchored %d smooth-region vertices tangentially (residual ratio %.2f)",
-             info["reanchored"], ratio)
-    return V_new
-
-
-REINTEGRATE_KEEPS_FOLDS = True
-"""After the re-integration from the input (round 9) of Gaussian noise along the normals the
-faces folded in the result are the input's own layout, folded in the truth too (nllr_igea: 83
-against the truth's 74 and the input's 296), and are kept: unfolding them measured igea MSAE
-196.9 → 220.5, E_V 2.58e-05 → 3.30e-05. Impulsive noise folds faces around its thrown
-vertices, and these are still unfolded (nllr_nicolo 76.8 kept, 66.8 unfolded; pierrot 53.6 /
-58.3)."""
-
-
-REINTEGRATE_POST_STEPS = 5
-"""Sun et al. steps of the guidance pass that follows the re-integration (round 9): the
-re-integrated vertices carry the input's one-ring jitter along the normals that ``k`` steps
-left; one more filter pass takes it (nllr_igea E_a 9.397 → 9.351°, nicolo 5.545 → 5.351°,
-pierrot 4.776 → 4.763°; MSAE 196.9 → 196.8, 66.8 → 64.5, 58.3 → 60.0)."""
-
-
-def _organic_finish(V_in, V_out, F, topo, M_E, gamma, impulsive, ww, info):
-    """Round 9 (:mod:`meshrepair.organic`): the one-ring guidance filter on organic meshes
-    (:func:`guidance_rule`), then the re-integration from the input (:func:`reintegrate_rule`);
-    records its decisions in ``info``."""
-    from .organic import guidance_filter, reintegrate, residual_level
-    from .reproject import residual_tangential_ratio
-
-    p = guidance_rule(gamma, info["outside_weight"], ww)
-    if p == 0:
-        return V_out
-    X = guidance_filter(V_out, F, M_E, topo, passes=p)
-    info["guidance_passes"] = p
-    reanchored = info.get("reanchored", 0) > 0
-    ratio = residual_tangential_ratio(V_out, V_in, F) if reanchored else float("nan")
-    info["reanchor_ratio_after"] = ratio
-    level = residual_level(V_out, V_in, F) / max(gamma, 1e-12)
-    info["residual_level_ratio"] = level
-    k = reintegrate_rule(p, reanchored, impulsive, ratio, gamma, level)
-    from .organic_fidelity import reintegrate_allowed
-
-    if not reintegrate_allowed(info["tangential_ratio"], impulsive):  # round 10l
-        k = 0
-    if k:  # then one more guidance pass with half the steps (REINTEGRATE_POST_STEPS)
-        from .denoise_folds import reintegration_keeps
-        from .relax import locally_flipped_faces as _folded
-
-        Xr = reintegrate(V_out, V_in, F, X, steps=k)
-        nr, ng = int(_folded(Xr, topo).sum()), int(_folded(X, topo).sum())
-        if reintegration_keeps(ratio, nr, ng):  # round 10s: no in-plane folds put back
-            X = guidance_filter(Xr, F, M_E, topo, passes=1, steps=REINTEGRATE_POST_STEPS)
-            info["reintegrate_steps"] = k
-        else:
-            info["reintegrate_rejected"] = nr - ng
-            log.info("re-integration not kept: %d more folded faces than its target", nr - ng)
-    log.info("organic finish: %d guidance passes, %d re-integration steps (ratio %.2f)",
-             p, k, ratio)
-    return X
 
 
 def default_stages(*, robust_iters: int = 40, feature_iters: int = 60, a: float = 10.0,
@@ -600,52 +449,10 @@ def _denoise(V, F, *, lam, th, a, robust_iters, feature_iters, mask_update_every
                 f"denoise collapsed this closed mesh: its volume fell to {shrink:.3g} of the "
                 f"input's even without the robust stage ({len(V)} vertices; a mesh this coarse "
                 "has no smooth regions for the model); it cannot be denoised")
-    info["polished"] = 0.0
-    # the rule reads the automatic decisions only (a user-set Willmore weight is not a finding)
-    pr = polish_rule(max(gamma, gamma_rms), w_cad,
-                     ww if willmore_weight is None else 1.0, info["noise_length"])
-    if polish and pr is not None:
-        from .polish import polish as _polish
-        from .polish_fidelity import POLISH_ETA
-
-        # the vertex step keeps the solve's data term (round 9b, meshrepair.polish_fidelity)
-        V_out, info["polished"] = _polish(V_out, F, M_E, topo, rings=pr[0], tau=pr[1],
-                                          passes=pr[2], data=Vd[inv] if reorder else Vd,
-                                          eta=POLISH_ETA if POLISH_DATA else 0.0)
-        log.info("polish (%d rings, %.1f deg, %d passes) on %.1f %% of the faces", *pr,
-                 100 * info["polished"])
-    info["lowpass_steps"] = 0
-    if sup_v is not None and willmore_weight is None:  # round 9s: organic mesh, white noise
-        from . import lowpass as _lp
-
-        if _lp.applies(info["support_fraction"], ww):
-            k = _lp.steps_from_noise(gamma)
-            nrm = _lp.normal_only(info["tangential_ratio"], gamma)
-            V_out = _lp.taubin_region(V_out, topo.edges, ~sup_v, k, F=F if nrm else None)
-            info["lowpass_steps"] = k
-    info.update(reanchor_ratio=float("nan"), reanchored=0, reanchor_shift=0.0)
-    if REANCHOR and sup_v is not None:  # before the unfolding: it judges the final positions
-        V_out = _reanchor_smooth(V, V_out, F, topo, sup_v, max(gamma, gamma_rms), info)
-    info.update(guidance_passes=0, reintegrate_steps=0, reanchor_ratio_after=float("nan"),
-                residual_level_ratio=float("nan"), reintegrate_rejected=0)
-    if sup_v is not None and willmore_weight is None:  # organic finish (round 9)
-        V_out = _organic_finish(V, V_out, F, topo, M_E, gamma, impulsive, ww, info)
-    info.update(cad_finish_passes=0, cad_finish_gated=0.0)
-    if sup_v is not None and willmore_weight is None:  # CAD finish (round 9c)
-        from .cadfinish import cad_finish, cad_finish_rule
-
-        pc = cad_finish_rule(gamma, info["outside_weight"], ww)
-        if pc:
-            V_out, info["cad_finish_gated"] = cad_finish(V_out, F, M_E, topo, passes=pc)
-            info["cad_finish_passes"] = pc
-    info["sharpened"] = 0.0
-    sr = sharpen_rule(ww if willmore_weight is None else 1.0, info["noise_length"])
-    if polish and sr is not None:  # correlated noise: rounded creases, kept where data agree
-        from .modes import sharpen
-
-        V_out, info["sharpened"] = sharpen(V_out, V, F, M_E, topo, rings=sr)
-        log.info("crease sharpening (%d rings) kept on %.1f %% of the vertices", sr,
-                 100 * info["sharpened"])
+    V_out = finish_result(V, V_out, F, topo, M_E, data=Vd[inv] if reorder else Vd, sup_v=sup_v,
+                          gamma=gamma, gamma_rms=gamma_rms, impulsive=impulsive, ww=ww,
+                          w_cad=w_cad, automatic=willmore_weight is None, polish=polish,
+                          info=info)
     n_res_folded = 0
     if unfold and UNFOLD_RESULT and not (info["reintegrate_steps"] and REINTEGRATE_KEEPS_FOLDS
                                            and not impulsive):
