@@ -13,27 +13,15 @@ from __future__ import annotations
 import importlib
 
 import _common  # noqa: F401  (limits BLAS threads before numpy)
-import numpy as np
 
 MESHES = ("fandisk", "sharp_sphere", "trim_star", "screwdriver", "rocker_arm", "camelhead", "spot")
 LEVELS = ((0.1, 1.0), (0.2, 0.6))
 
 
-def impulsive_noise(V, F, frac, amp, seed=5):
-    from meshrepair.geometry import mean_edge_length, vertex_normals
-
-    rng = np.random.default_rng(seed)
-    l = mean_edge_length(V, F)
-    N = vertex_normals(V, F)
-    Vn = V + 0.1 * l * rng.normal(size=(len(V), 1)) * N
-    idx = rng.random(len(V)) < frac
-    Vn[idx] += (amp * l * rng.normal(size=(idx.sum(), 1))) * N[idx]
-    return Vn
-
-
 def main() -> None:
     from meshrepair import denoise
     from meshrepair.metrics import msae
+    from meshrepair.synthetic import impulsive_noise
 
     rules = importlib.import_module("meshrepair.denoise_rules")
     info = _common.machine_info()

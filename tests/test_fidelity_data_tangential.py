@@ -14,6 +14,7 @@ from meshrepair.denoise_folds import (
 from meshrepair.denoise_rules import CAD_SUPPORT, TANGENTIAL_MAX
 from meshrepair.geometry import mean_edge_length, vertex_normals
 from meshrepair.relax import untangle
+from meshrepair.synthetic import impulsive_noise
 from meshrepair.topology import edge_topology
 
 from .bundled import bundled_mesh
@@ -36,13 +37,7 @@ def test_rule_table():
 
 def _thrown(V, F, frac, amp, seed):
     """benchmarks/impulsive.py's noise: 0.1 l along the normals, a fraction thrown amp l."""
-    rng = np.random.default_rng(seed)
-    l = mean_edge_length(V, F)
-    N = vertex_normals(V, F)
-    Vn = V + 0.1 * l * rng.normal(size=(len(V), 1)) * N
-    idx = rng.random(len(V)) < frac
-    Vn[idx] += (amp * l * rng.normal(size=(idx.sum(), 1))) * N[idx]
-    return Vn
+    return impulsive_noise(V, F, frac, amp, seed=seed)
 
 
 def _data_errors(V, F, Vn):

@@ -9,6 +9,7 @@ from scipy.spatial.transform import Rotation
 from meshrepair import mean_angle_error, msae, vertex_error
 from meshrepair.geometry import face_normals, vertex_normals
 from meshrepair.organic import guidance_filter, reintegrate, reintegration_start
+from meshrepair.synthetic import grid_plane
 from meshrepair.topology import edge_topology
 
 from .conftest import needs_meshes, published_triple
@@ -18,13 +19,7 @@ rules_mod = importlib.import_module("meshrepair.denoise_rules")
 
 
 def _plane(n=12):
-    x, y = np.meshgrid(np.arange(n, dtype=float), np.arange(n, dtype=float))
-    V = np.c_[x.ravel(), y.ravel(), np.zeros(n * n)]
-    idx = np.arange(n * n).reshape(n, n)
-    a, b = idx[:-1, :-1].ravel(), idx[:-1, 1:].ravel()
-    c, d = idx[1:, :-1].ravel(), idx[1:, 1:].ravel()
-    F = np.r_[np.c_[a, b, d], np.c_[a, d, c]].astype(np.int64)
-    return V, F
+    return grid_plane(n)
 
 
 def _sphere(subdiv=3):

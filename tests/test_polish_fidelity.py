@@ -14,6 +14,7 @@ from meshrepair.polish_fidelity import (
     polish_energy,
     vertex_update_with_data,
 )
+from meshrepair.synthetic import grid_plane
 from meshrepair.topology import edge_topology
 
 from .conftest import published_triple
@@ -23,12 +24,7 @@ finish_mod = importlib.import_module("meshrepair.denoise_finish")
 
 
 def _plane(n=12):
-    x, y = np.meshgrid(np.arange(n, dtype=float), np.arange(n, dtype=float))
-    V = np.c_[x.ravel(), y.ravel(), np.zeros(n * n)]
-    idx = np.arange(n * n).reshape(n, n)
-    a, b = idx[:-1, :-1].ravel(), idx[:-1, 1:].ravel()
-    c, d = idx[1:, :-1].ravel(), idx[1:, 1:].ravel()
-    return V, np.r_[np.c_[a, b, d], np.c_[a, d, c]].astype(np.int64)
+    return grid_plane(n)
 
 
 def test_data_prox_is_the_argmin():

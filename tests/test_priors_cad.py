@@ -11,6 +11,7 @@ from scipy.optimize import minimize
 from meshrepair import add_noise, denoise, mean_angle_error, msae
 from meshrepair.priors import reg_energy_mixed, t_update_mixed
 from meshrepair.solver import ADMMSolver, SolverOptions, Stage
+from meshrepair.synthetic import grid_plane
 
 from .conftest import published_triple
 
@@ -50,11 +51,7 @@ def test_t_update_per_edge_willmore_matches_brute_force(with_flat):
 
 
 def _plane(n=12):
-    x, y = np.meshgrid(np.arange(n, dtype=float), np.arange(n, dtype=float))
-    V = np.c_[x.ravel(), y.ravel(), np.zeros(n * n)]
-    a = (np.arange(n - 1)[:, None] * n + np.arange(n - 1)[None, :]).ravel()
-    F = np.r_[np.c_[a, a + 1, a + n + 1], np.c_[a, a + n + 1, a + n]].astype(np.int64)
-    return V, F
+    return grid_plane(n)
 
 
 def test_solver_energy_with_per_edge_weights():

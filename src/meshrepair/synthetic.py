@@ -1,5 +1,5 @@
-"""Synthetic damage for tests and benchmarks: geodesic discs, damaged regions, rigid motions and
-exactly mirror-symmetric meshes.
+"""Synthetic damage for tests and benchmarks: geodesic discs, damaged regions, rigid motions,
+exactly mirror-symmetric meshes, a triangulated grid plane and thrown-vertex (impulsive) noise.
 
 These build the cut-and-repair cases of the test suite and of ``benchmarks/completion.py`` (a
 region of a known mesh is damaged and repaired, and the result is compared with the original),
@@ -134,3 +134,37 @@ def symmetrize(V: np.ndarray, F: np.ndarray, axis: int = 0) -> tuple[np.ndarray,
     W.merge_vertices(digits_vertex=10)
     W.remove_unreferenced_vertices()
     return np.asarray(W.vertices, float), np.asarray(W.faces, np.int64)
+
+
+def grid_plane(n: int) -> tuple[np.ndarray, np.ndarray]:
+    """The unit grid of ``n × n`` vertices in the plane z = 0, each square cut along its diagonal.
+
+    Returns
+    -------
+    V : (n², 3) float64, vertex ``i n + j`` at ``(j, i, 0)``
+    F : (2 (n - 1)², 3) int64, faces ``(a, a + 1, a + n + 1)`` and ``(a, a + n + 1, a + n)``
+    """
+    x, y = np.meshgrid(np.arange(n, dtype=float), np.arange(n, dtype=float))
+    V = np.c_[x.ravel(), y.ravel(), np.zeros(n * n)]
+    a = (np.arange(n - 1)[:, None] * n + np.arange(n - 1)[None, :]).ravel()
+    F = np.r_[np.c_[a, a + 1, a + n + 1], np.c_[a, a + n + 1, a + n]].astype(np.int64)
+    return V, F
+
+
+def impulsive_noise(V: np.ndarray, F: np.ndarray, frac: float, amp: float,
+                    seed: int = 5) -> np.ndarray:
+    """Impulsive noise of ``benchmarks/impulsive.py``: every vertex moves 0.1 mean edge lengths
+    ``l`` (Gaussian) along its normal, and a fraction ``frac`` of them is thrown a further
+    ``amp l`` (Gaussian) along it.
+
+    Returns
+    -------
+    (nV, 3) float64, a new array
+    """
+    rng = np.random.default_rng(seed)
+    length = mean_edge_length(V, F)
+    N = vertex_normals(V, F)
+    Vn = V + 0.1 * length * rng.normal(size=(len(V), 1)) * N
+    idx = rng.random(len(V)) < frac
+    Vn[idx] += (amp * length * rng.normal(size=(idx.sum(), 1))) * N[idx]
+    return Vn
