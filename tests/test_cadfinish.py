@@ -8,19 +8,14 @@ from meshrepair import denoise, mean_angle_error, msae
 from meshrepair.cadfinish import cad_finish, cad_finish_rule, crease_side_gate, finish_targets
 from meshrepair.geometry import face_normals
 from meshrepair.polish import _neighbourhood_csr, filter_normals
+from meshrepair.synthetic import grid_plane
 from meshrepair.topology import edge_topology
 
 from .conftest import needs_meshes, shared_mesh
 
 
 def _grid(n=14):
-    x, y = np.meshgrid(np.arange(n, dtype=float), np.arange(n, dtype=float))
-    V = np.c_[x.ravel(), y.ravel(), np.zeros(n * n)]
-    idx = np.arange(n * n).reshape(n, n)
-    a, b = idx[:-1, :-1].ravel(), idx[:-1, 1:].ravel()
-    c, d = idx[1:, :-1].ravel(), idx[1:, 1:].ravel()
-    F = np.r_[np.c_[a, b, d], np.c_[a, d, c]].astype(np.int64)
-    return V, F
+    return grid_plane(n)
 
 
 def _fold(n=14, k=7, curved=False):

@@ -17,6 +17,7 @@ from meshrepair.modes import (
     sharpen,
     supported_by_data,
 )
+from meshrepair.synthetic import grid_plane
 from meshrepair.topology import edge_topology
 
 from .conftest import published_triple
@@ -25,13 +26,7 @@ rules_mod = importlib.import_module("meshrepair.denoise_rules")
 
 
 def _grid(n):
-    x, y = np.meshgrid(np.arange(n, dtype=float), np.arange(n, dtype=float))
-    V = np.c_[x.ravel(), y.ravel(), np.zeros(n * n)]
-    idx = np.arange(n * n).reshape(n, n)
-    a, b = idx[:-1, :-1].ravel(), idx[:-1, 1:].ravel()
-    c, d = idx[1:, :-1].ravel(), idx[1:, 1:].ravel()
-    F = np.r_[np.c_[a, b, d], np.c_[a, d, c]].astype(np.int64)
-    return V, F
+    return grid_plane(n)
 
 
 def _fold(n=30, angle=40.0, radius=0.0):
