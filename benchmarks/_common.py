@@ -97,6 +97,17 @@ def subdivided_noisy(base: str, levels: int, gamma: float, seed: int = 0):
     return V, Vn, F, time.perf_counter() - t, False
 
 
+def write_text(path, text: str) -> Path:
+    """Write a benchmark's output (a table or JSON it regenerates) atomically, through the
+    project's one output rule (:func:`meshrepair.atomic.atomic_write`): an interrupted run never
+    leaves a half-written file. Benchmarks overwrite their own outputs by design (re-runs)."""
+    from meshrepair.atomic import atomic_write
+
+    with atomic_write(path, "w", encoding="utf-8") as fh:
+        fh.write(text)
+    return Path(path)
+
+
 def rss_now_mb() -> float:
     """Current resident set size (MiB), from /proc (Linux)."""
     try:

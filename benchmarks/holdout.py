@@ -129,7 +129,7 @@ def main(argv=None) -> None:
     C.warm_imports()
     rows = run(args.only)
     if args.json:
-        Path(args.json).write_text(json.dumps(rows, ensure_ascii=False, indent=1))
+        C.write_text(args.json, json.dumps(rows, ensure_ascii=False, indent=1))
 
 
 if __name__ == "__main__":

@@ -157,9 +157,9 @@ def main(argv=None) -> None:
     print()
     print(md)
     if args.out:
-        Path(args.out).write_text(md + "\n")
+        C.write_text(args.out, md + "\n")
     if args.json:
-        Path(args.json).write_text(json.dumps({"machine": info, "rows": rows}, indent=1))
+        C.write_text(args.json, json.dumps({"machine": info, "rows": rows}, indent=1))
     if args.picture:
         for n in names:
             if n in PICTURES:

@@ -121,7 +121,7 @@ def main(argv=None) -> None:
     info = C.machine_info()
     rows = run(a.meshes, a.gammas, a.directions, a.seeds)
     if a.json:
-        a.json.write_text(json.dumps(rows, indent=1, default=float))
+        C.write_text(a.json, json.dumps(rows, indent=1, default=float))
     print(f"machine: {info.get('cpu')}, {info.get('cores')} cores, load {info.get('loadavg')}, "
           f"memory probe {info['memprobe_ms']} ms, git {info['git']}")
     print()
