@@ -178,6 +178,24 @@ def finish_result(V, V_out, F, topo, M_E, *, data, sup_v, gamma, gamma_rms, impu
                 residual_level_ratio=float("nan"), reintegrate_rejected=0)
     if sup_v is not None and automatic:  # organic finish (round 9)
         V_out = _organic_finish(V, V_out, F, topo, M_E, gamma, impulsive, ww, info)
+    info.update(coarse_roughness=float("nan"), coarse_steps=0)
+    if sup_v is not None and automatic:  # round 11c: smooth at the mesh's resolution
+        from . import coarse as _co
+
+        if _co.coarse_steps(gamma, 0.0, support_fraction=info["support_fraction"],
+                            outside=info["outside_weight"], willmore=ww, impulsive=impulsive):
+            c = _co.curvature_roughness(V_out, F, topo.edges)
+            info["coarse_roughness"] = c
+            kc = _co.coarse_steps(gamma, c, support_fraction=info["support_fraction"],
+                                  outside=info["outside_weight"], willmore=ww,
+                                  impulsive=impulsive)
+            if kc:
+                from .lowpass import taubin_region
+
+                nrm = _co.normal_only(info["tangential_ratio"], gamma)
+                V_out = taubin_region(V_out, topo.edges, np.ones(len(V_out), bool), kc,
+                                      F=F if nrm else None)
+                info["coarse_steps"] = kc
     info.update(cad_finish_passes=0, cad_finish_gated=0.0)
     if sup_v is not None and automatic:  # CAD finish (round 9c)
         from .cadfinish import cad_finish, cad_finish_rule

@@ -1,0 +1,99 @@
+"""A longer low-pass where the surface is smooth at the mesh's resolution (issue 12, round 11c).
+
+On an organic mesh with white noise the defaults end with a short low-pass
+(:mod:`meshrepair.lowpass`, ``k = round((γ̂/0.13)²)`` pairs) because a longer one smooths away
+the fine relief of scanned surfaces (nicolo, bunny, rocker_arm lose from the first extra pair at
+γ = 0.1). A surface sampled finely with respect to its *curvature variation* (spot: a smooth
+subdivision-like surface at 2,930 vertices) has no such relief: its mean curvature changes over
+many rings, so an isotropic filter at the noise's length only removes noise there (spot γ0.3
+normal noise 87.3 → 57.8 with 20 more full λ|μ pairs, while nicolo γ0.3 goes 84.5 → 87.3).
+
+**The read** (sampling density of the curvature field). With ``W`` the uniform umbrella operator
+and ``n`` the result's vertex normals, the two-step curvature proxy and its variation are
+
+.. math::  h = \\langle V - W^2 V,\\; n\\rangle, \\qquad
+           c = \\frac{\\lVert h - W^2 h\\rVert_2}{\\lVert h\\rVert_2},
+
+a dimensionless ratio (invariant to scaling, rotation and translation of the mesh; 0 on a
+sphere of uniform sampling, where ``h`` is constant, and growing towards √2 as ``h`` becomes
+white): how much the curvature changes from a two-ring neighbourhood to the next relative to
+its own size. Read on the result of the defaults (the noise left there is small next to the
+curvature at two rings): spot 0.18-0.24 at γ 0.1-0.4, rocker_arm 0.27-0.28, bunny 0.34-0.36,
+nicolo 0.32-0.40 (truth: spot 0.20, rocker_arm 0.33, bunny 0.44, nicolo 0.49).
+
+**The rule** (:func:`coarse_steps`): on an organic mesh (crease support below
+:data:`meshrepair.denoise_rules.CAD_SUPPORT`, outside weight 1) with white, non-impulsive noise
+(Willmore weight 1), when ``c < c_0 = 0.25``:
+
+.. math:: k = \\mathrm{clip}\\bigl(\\mathrm{round}((γ̂/γ_c)^2), 0, K_{max}\\bigr),
+          \\qquad γ_c = 0.06,\\ K_{max} = 24,
+
+full (tangential too) Taubin λ|μ pairs (:func:`meshrepair.lowpass.taubin_region`) on every
+vertex, after the organic finish (as in :mod:`meshrepair.presmooth`, the probe's short "crease"
+chains on an organic mesh are noise: keeping them fixed costs spot γ0.3 random 39.1 → 46.3). The width √k ∝ γ̂
+as in :mod:`meshrepair.lowpass`; ``γ_c`` was read off spot's design rows (docs/parameters.md,
+round 11c). The step is projected on the vertex normals (:func:`normal_only`) when the noise
+lies along the normals at a low level (``r_t < 0.65`` and ``γ̂ ≤ 0.13``, the gates of
+:mod:`meshrepair.lowpass`): the input's tangential layout is then exact and the solve left no
+drift, so E_V does not grow (spot γ0.1 normal 23.2 with it, 24.3 and E_V ×1.9 without). On a
+low-passed input (round 10h, γ̂ 0.03-0.06) ``k`` is 0 or 1.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+COARSE = True
+C_0 = 0.25
+GAMMA_C = 0.06
+MAX_STEPS = 24
+
+
+def curvature_roughness(V: np.ndarray, F: np.ndarray, edges: np.ndarray) -> float:
+    """``c = ‖h − W²h‖ / ‖h‖`` of the module docstring (NaN on a flat mesh, ``h = 0``).
+
+    Parameters
+    ----------
+    V : (nV, 3) float64
+    F : (nF, 3) int64
+    edges : (nE, 2) int64, the mesh's edges
+
+    Returns
+    -------
+    float
+    """
+    from .geometry import vertex_normals
+    from .lowpass import umbrella
+
+    V = np.asarray(V, dtype=np.float64)
+    W = umbrella(edges, len(V))
+    n = vertex_normals(V, F)
+    h = np.einsum("ij,ij->i", V - W @ (W @ V), n)
+    den = float(np.linalg.norm(h))
+    if not den > 0:
+        return float("nan")
+    return float(np.linalg.norm(h - W @ (W @ h)) / den)
+
+
+def coarse_steps(gamma: float, roughness: float, *, support_fraction: float, outside: float,
+                 willmore: float, impulsive: bool) -> int:
+    """λ|μ pairs ``k`` of the module docstring; 0 when the gate does not fire."""
+    from .denoise_rules import CAD_SUPPORT
+
+    if not COARSE or impulsive or outside != 1.0 or willmore != 1.0:
+        return 0
+    if not (support_fraction < CAD_SUPPORT) or not np.isfinite(gamma):
+        return 0
+    if not (np.isfinite(roughness) and roughness < C_0):
+        return 0
+    return int(np.clip(round((float(gamma) / GAMMA_C) ** 2), 0, MAX_STEPS))
+
+
+def normal_only(tangential: float, gamma: float) -> bool:
+    """Noise along the normals (``r_t < 0.65``) at a low level (``γ̂ ≤ 0.13``): the step of
+    :func:`meshrepair.lowpass.taubin_region` is projected on the vertex normals."""
+    from .denoise_rules import TANGENTIAL_MAX
+    from .lowpass import TANGENTIAL_GAMMA
+
+    return bool(np.isfinite(tangential) and tangential < TANGENTIAL_MAX
+                and gamma <= TANGENTIAL_GAMMA)
