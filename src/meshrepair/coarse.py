@@ -29,14 +29,14 @@ nicolo 0.32-0.40 (truth: spot 0.20, rocker_arm 0.33, bunny 0.44, nicolo 0.49).
           \\qquad γ_c = 0.06,\\ K_{max} = 24,
 
 full (tangential too) Taubin λ|μ pairs (:func:`meshrepair.lowpass.taubin_region`) on every
-vertex, after the organic finish (as in :mod:`meshrepair.presmooth`, the probe's short "crease"
-chains on an organic mesh are noise: keeping them fixed costs spot γ0.3 random 39.1 → 46.3).
-The width √k ∝ γ̂ as in :mod:`meshrepair.lowpass`; ``γ_c`` was read off spot's design rows
-(docs/parameters.md, round 11c). The step is projected on the vertex normals
+vertex, after the organic finish (as in :mod:`meshrepair.presmooth`, the probe's short
+"crease" chains on an organic mesh are noise: keeping them fixed costs spot γ0.3 random
+39.1 → 46.3). The width √k ∝ γ̂ as in :mod:`meshrepair.lowpass`; ``γ_c`` was read off spot's
+design rows (docs/parameters.md, round 11c). The step is projected on the vertex normals
 (:func:`normal_only`) when the noise lies along the normals at a low level (``r_t < 0.65``
-and ``γ̂ ≤ 0.13``, the gates of :mod:`meshrepair.lowpass`): the input's tangential layout is then exact and the solve left no
-drift, so E_V does not grow (spot γ0.1 normal 23.2 with it, 24.3 and E_V ×1.9 without). On a
-low-passed input (round 10h, γ̂ 0.03-0.06) ``k`` is 0 or 1.
+and ``γ̂ ≤ 0.13``, the gates of :mod:`meshrepair.lowpass`): the input's tangential layout is
+then exact and the solve left no drift, so E_V does not grow (spot γ0.1 normal 23.2 with it;
+24.3 and E_V ×1.9 without). On a low-passed input (round 10h, γ̂ 0.03-0.06) ``k`` is 0 or 1.
 """
 
 from __future__ import annotations
