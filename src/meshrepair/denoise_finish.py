@@ -190,11 +190,9 @@ def finish_result(V, V_out, F, topo, M_E, *, data, sup_v, gamma, gamma_rms, impu
                                   outside=info["outside_weight"], willmore=ww,
                                   impulsive=impulsive)
             if kc:
-                from .lowpass import taubin_region
-
                 nrm = _co.normal_only(info["tangential_ratio"], gamma)
-                V_out = taubin_region(V_out, topo.edges, np.ones(len(V_out), bool), kc,
-                                      F=F if nrm else None)
+                keep = bool(info["reintegrate_steps"]) and not impulsive  # its folds are kept
+                V_out = _co.coarse_lowpass(V_out, F, topo, kc, normal=nrm, unfold=not keep)
                 info["coarse_steps"] = kc
     info.update(cad_finish_passes=0, cad_finish_gated=0.0)
     if sup_v is not None and automatic:  # CAD finish (round 9c)
