@@ -70,8 +70,35 @@ def test_steps_rule_and_gate():
     assert co.coarse_steps(0.27, 0.2, **{**kw, "support_fraction": 0.3}) == 0  # CAD part
     assert co.coarse_steps(0.27, 0.2, **{**kw, "outside": 6.0}) == 0
     assert co.coarse_steps(0.27, 0.2, **{**kw, "willmore": 4.0}) == 0  # correlated noise
+    assert co.coarse_steps(0.27, 0.2, **{**kw, "presmoothed": True}) == 0  # round 10h's run
     assert co.normal_only(0.3, 0.12) and not co.normal_only(0.3, 0.2)
     assert not co.normal_only(1.0, 0.1) and not co.normal_only(float("nan"), 0.1)
+
+
+def test_fold_zone_is_fixed_and_the_rest_is_filtered():
+    """A face turned over on a sphere: its vertices and FOLD_RINGS rings around them do not
+    move (free_vertices); without the unfolding the fold stays, every other vertex is filtered;
+    with it the fold is gone and the whole sphere is filtered."""
+    from meshrepair.relax import locally_flipped_faces
+    from meshrepair.topology import vertex_adjacency
+
+    V, F, e = _sphere(3)
+    topo = edge_topology(F, len(V))
+    X = V.copy()
+    X[F[0, 0]] = 2.5 * X[F[0, 1]] - 1.5 * X[F[0, 0]]  # moved past a neighbour: faces fold
+    folded = locally_flipped_faces(X, topo)
+    assert folded.any()
+    free = co.free_vertices(X, F, topo)
+    fixed = np.zeros(len(V), bool)
+    fixed[F[folded].ravel()] = True
+    A = vertex_adjacency(e, len(V))
+    for _ in range(co.FOLD_RINGS):
+        fixed |= A @ fixed.astype(float) > 0
+    assert np.array_equal(free, ~fixed)
+    Y = co.coarse_lowpass(X, F, topo, 2, normal=False, unfold=False)
+    assert np.array_equal(Y[fixed], X[fixed]) and not np.allclose(Y[free], X[free])
+    Z = co.coarse_lowpass(X, F, topo, 2, normal=False, unfold=True)
+    assert not locally_flipped_faces(Z, topo).any()
 
 
 def test_defaults_record_the_read():

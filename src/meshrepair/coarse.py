@@ -36,7 +36,11 @@ design rows (docs/parameters.md, round 11c). The step is projected on the vertex
 (:func:`normal_only`) when the noise lies along the normals at a low level (``r_t < 0.65``
 and ``γ̂ ≤ 0.13``, the gates of :mod:`meshrepair.lowpass`): the input's tangential layout is
 then exact and the solve left no drift, so E_V does not grow (spot γ0.1 normal 23.2 with it;
-24.3 and E_V ×1.9 without). On a low-passed input (round 10h, γ̂ 0.03-0.06) ``k`` is 0 or 1.
+24.3 and E_V ×1.9 without).
+
+On a low-passed input (the coarse-to-fine run of round 10h) the rule does not run: ``c`` there
+reads the input filter's own smoothing, not the surface's (rocker_arm γ0.4 random, 8 seeds of
+``benchmarks/seeds.py``: median 68.8 → 70.9 when it fired there with ``k = 1``).
 """
 
 from __future__ import annotations
@@ -76,11 +80,12 @@ def curvature_roughness(V: np.ndarray, F: np.ndarray, edges: np.ndarray) -> floa
 
 
 def coarse_steps(gamma: float, roughness: float, *, support_fraction: float, outside: float,
-                 willmore: float, impulsive: bool) -> int:
-    """λ|μ pairs ``k`` of the module docstring; 0 when the gate does not fire."""
+                 willmore: float, impulsive: bool, presmoothed: bool = False) -> int:
+    """λ|μ pairs ``k`` of the module docstring; 0 when the gate does not fire (also on the run
+    of :mod:`meshrepair.presmooth` on a low-passed input, ``presmoothed``)."""
     from .denoise_rules import CAD_SUPPORT
 
-    if not COARSE or impulsive or outside != 1.0 or willmore != 1.0:
+    if not COARSE or impulsive or presmoothed or outside != 1.0 or willmore != 1.0:
         return 0
     if not (support_fraction < CAD_SUPPORT) or not np.isfinite(gamma):
         return 0

@@ -182,13 +182,12 @@ def finish_result(V, V_out, F, topo, M_E, *, data, sup_v, gamma, gamma_rms, impu
     if sup_v is not None and automatic:  # round 11c: smooth at the mesh's resolution
         from . import coarse as _co
 
-        if _co.coarse_steps(gamma, 0.0, support_fraction=info["support_fraction"],
-                            outside=info["outside_weight"], willmore=ww, impulsive=impulsive):
+        gate = dict(support_fraction=info["support_fraction"], outside=info["outside_weight"],
+                    willmore=ww, impulsive=impulsive, presmoothed=info.get("presmoothed", False))
+        if _co.coarse_steps(gamma, 0.0, **gate):
             c = _co.curvature_roughness(V_out, F, topo.edges)
             info["coarse_roughness"] = c
-            kc = _co.coarse_steps(gamma, c, support_fraction=info["support_fraction"],
-                                  outside=info["outside_weight"], willmore=ww,
-                                  impulsive=impulsive)
+            kc = _co.coarse_steps(gamma, c, **gate)
             if kc:
                 nrm = _co.normal_only(info["tangential_ratio"], gamma)
                 keep = bool(info["reintegrate_steps"]) and not impulsive  # its folds are kept
