@@ -126,23 +126,28 @@ def free_vertices(V: np.ndarray, F: np.ndarray, topo, rings: int = FOLD_RINGS) -
 
 
 def coarse_lowpass(V: np.ndarray, F: np.ndarray, topo, steps: int, *, normal: bool,
-                   unfold: bool = True) -> np.ndarray:
+                   unfold: bool = True, reference: np.ndarray | None = None) -> np.ndarray:
     """``steps`` λ|μ pairs of :func:`meshrepair.lowpass.taubin_region` (projected on the
     vertex normals when ``normal``); a new array.
 
     With ``unfold`` the faces folded in ``V`` are first unfolded
     (:func:`meshrepair.denoise_folds.unfold_result`, which ``denoise`` runs after the finish
-    anyway): the filter then acts on the unfolded surface, as it would after the unfolding
-    (camelhead γ0.1 random: 39.1 without the rule, 46.8 with the filter across its 13 folded
-    faces, 35.5 with the fold zone kept fixed, 32.2 after the unfolding; spot γ0.3 normal
-    87.3 / 67.4 fixed / 57.8 after). Faces still folded (those ``denoise`` keeps on purpose,
-    ``unfold=False``, or that the unfolding could not remove) and :data:`FOLD_RINGS` rings
-    around them do not move (:func:`free_vertices`).
+    anyway, with the same per-cluster check against ``reference``, the robust probe's result:
+    a fold the probe holds too is kept): the filter then acts on the unfolded surface, as it
+    would after the unfolding, on every vertex (camelhead γ0.1 random: 39.1 without the rule,
+    46.8 with the filter across its 13 folded faces, 35.5 with the fold zone kept fixed, 32.2
+    after the unfolding; spot γ0.3 normal 87.3 / 67.4 fixed / 57.8 after: the folds the probe
+    holds too are not features on a surface that is smooth at the mesh's resolution, the filter
+    takes them). Without ``unfold`` (the folds ``denoise`` keeps on purpose after the
+    re-integration of round 9) the faces folded in ``V`` and :data:`FOLD_RINGS` rings around
+    them do not move (:func:`free_vertices`).
     """
     from .denoise_folds import unfold_result
     from .lowpass import taubin_region
 
     if unfold:
-        V, _ = unfold_result(V, topo)
-    return taubin_region(V, topo.edges, free_vertices(V, F, topo), int(steps),
-                         F=F if normal else None)
+        V, _ = unfold_result(V, topo, reference)
+        free = np.ones(len(V), bool)
+    else:
+        free = free_vertices(V, F, topo)
+    return taubin_region(V, topo.edges, free, int(steps), F=F if normal else None)

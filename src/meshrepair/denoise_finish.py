@@ -129,7 +129,7 @@ def _organic_finish(V_in, V_out, F, topo, M_E, gamma, impulsive, ww, info):
 
 
 def finish_result(V, V_out, F, topo, M_E, *, data, sup_v, gamma, gamma_rms, impulsive, ww,
-                  w_cad, automatic, polish, info):
+                  w_cad, automatic, polish, info, probe=None):
     """Steps 1-6 of the module docstring on the solve's result ``V_out`` (input order).
 
     Parameters
@@ -143,6 +143,8 @@ def finish_result(V, V_out, F, topo, M_E, *, data, sup_v, gamma, gamma_rms, impu
     automatic : the Willmore weight was read from the input (not set by the user)
     polish : the user's ``polish`` switch
     info : dict, the decisions so far; updated in place with each step's
+    probe : (nV, 3) float64 or None, the robust probe's result (the reference of the unfolding
+        of the result, :func:`meshrepair.denoise_folds.unfold_result`)
 
     Returns
     -------
@@ -191,7 +193,8 @@ def finish_result(V, V_out, F, topo, M_E, *, data, sup_v, gamma, gamma_rms, impu
             if kc:
                 nrm = _co.normal_only(info["tangential_ratio"], gamma)
                 keep = bool(info["reintegrate_steps"]) and not impulsive  # its folds are kept
-                V_out = _co.coarse_lowpass(V_out, F, topo, kc, normal=nrm, unfold=not keep)
+                V_out = _co.coarse_lowpass(V_out, F, topo, kc, normal=nrm, unfold=not keep,
+                                           reference=probe)
                 info["coarse_steps"] = kc
     info.update(cad_finish_passes=0, cad_finish_gated=0.0)
     if sup_v is not None and automatic:  # CAD finish (round 9c)
