@@ -8,22 +8,27 @@ subdivision-like surface at 2,930 vertices) has no such relief: its mean curvatu
 many rings, so an isotropic filter at the noise's length only removes noise there (spot γ0.3
 normal noise 87.3 → 57.8 with 20 more full λ|μ pairs, while nicolo γ0.3 goes 84.5 → 87.3).
 
-**The read** (sampling density of the curvature field). With ``W`` the uniform umbrella operator
-and ``n`` the result's vertex normals, the two-step curvature proxy and its variation are
+**The read** (sampling density of the curvature field). With ``W`` the uniform umbrella operator,
+``T`` one full Taubin λ|μ pair (:mod:`meshrepair.lowpass`), ``X = T^m V`` the result after
+``m = 8`` such pairs and ``n`` the vertex normals of ``X``, the two-step curvature proxy and its
+variation are
 
-.. math::  h = \\langle V - W^2 V,\\; n\\rangle, \\qquad
+.. math::  h = \\langle X - W^2 X,\\; n\\rangle, \\qquad
            c = \\frac{\\lVert h - W^2 h\\rVert_2}{\\lVert h\\rVert_2},
 
 a dimensionless ratio (invariant to scaling, rotation and translation of the mesh; 0 on a
 sphere of uniform sampling, where ``h`` is constant, and growing towards √2 as ``h`` becomes
 white): how much the curvature changes from a two-ring neighbourhood to the next relative to
-its own size. Read on the result of the defaults (the noise left there is small next to the
-curvature at two rings): spot 0.18-0.24 at γ 0.1-0.4, rocker_arm 0.27-0.28, bunny 0.34-0.36,
-nicolo 0.32-0.40 (truth: spot 0.20, rocker_arm 0.33, bunny 0.44, nicolo 0.49).
+its own size, at the scale of the filter ``T^m`` (√m ≈ 3 rings). The ``m`` pairs remove what
+the solve and the earlier finishes left of the noise, which otherwise decides ``c`` (read on
+the result itself, ``m = 0``, spot reads 0.18-0.28 and rocker_arm 0.25-0.28 depending on the
+noise level and on how much the finishes smoothed; with ``m = 8`` spot 0.156-0.175 on every row,
+rocker_arm 0.194-0.220, bunny 0.248-0.268, nicolo 0.286-0.317; truth after the same 8 pairs:
+spot 0.166, rocker_arm 0.215, bunny 0.30, nicolo 0.35).
 
 **The rule** (:func:`coarse_steps`): on an organic mesh (crease support below
 :data:`meshrepair.denoise_rules.CAD_SUPPORT`, outside weight 1) with white, non-impulsive noise
-(Willmore weight 1), when ``c < c_0 = 0.25``:
+(Willmore weight 1), when ``c < c_0 = 0.185``:
 
 .. math:: k = \\mathrm{clip}\\bigl(\\mathrm{round}((γ̂/γ_c)^2), 0, K_{max}\\bigr),
           \\qquad γ_c = 0.06,\\ K_{max} = 24,
@@ -38,9 +43,8 @@ and ``γ̂ ≤ 0.13``, the gates of :mod:`meshrepair.lowpass`): the input's tang
 then exact and the solve left no drift, so E_V does not grow (spot γ0.1 normal 23.2 with it;
 24.3 and E_V ×1.9 without).
 
-On a low-passed input (the coarse-to-fine run of round 10h) the rule does not run: ``c`` there
-reads the input filter's own smoothing, not the surface's (rocker_arm γ0.4 random, 8 seeds of
-``benchmarks/seeds.py``: median 68.8 → 70.9 when it fired there with ``k = 1``).
+On the low-passed input of round 10h (the coarse-to-fine run of :mod:`meshrepair.presmooth`)
+γ̂ reads 0.03-0.06, so ``k`` is 0 or 1 there.
 """
 
 from __future__ import annotations
@@ -48,28 +52,34 @@ from __future__ import annotations
 import numpy as np
 
 COARSE = True
-C_0 = 0.25
+C_0 = 0.185
+READ_STEPS = 8
 GAMMA_C = 0.06
 MAX_STEPS = 24
 
 
-def curvature_roughness(V: np.ndarray, F: np.ndarray, edges: np.ndarray) -> float:
-    """``c = ‖h − W²h‖ / ‖h‖`` of the module docstring (NaN on a flat mesh, ``h = 0``).
+def curvature_roughness(V: np.ndarray, F: np.ndarray, edges: np.ndarray, *,
+                        steps: int = READ_STEPS) -> float:
+    """``c = ‖h − W²h‖ / ‖h‖`` of the module docstring on ``T^steps V`` (NaN on a flat mesh,
+    ``h = 0``).
 
     Parameters
     ----------
     V : (nV, 3) float64
     F : (nF, 3) int64
     edges : (nE, 2) int64, the mesh's edges
+    steps : full Taubin pairs applied before the read (``m``; 0 reads ``V`` itself)
 
     Returns
     -------
     float
     """
     from .geometry import vertex_normals
-    from .lowpass import umbrella
+    from .lowpass import taubin_region, umbrella
 
     V = np.asarray(V, dtype=np.float64)
+    if steps > 0:
+        V = taubin_region(V, edges, np.ones(len(V), bool), int(steps))
     W = umbrella(edges, len(V))
     n = vertex_normals(V, F)
     h = np.einsum("ij,ij->i", V - W @ (W @ V), n)
@@ -80,12 +90,11 @@ def curvature_roughness(V: np.ndarray, F: np.ndarray, edges: np.ndarray) -> floa
 
 
 def coarse_steps(gamma: float, roughness: float, *, support_fraction: float, outside: float,
-                 willmore: float, impulsive: bool, presmoothed: bool = False) -> int:
-    """λ|μ pairs ``k`` of the module docstring; 0 when the gate does not fire (also on the run
-    of :mod:`meshrepair.presmooth` on a low-passed input, ``presmoothed``)."""
+                 willmore: float, impulsive: bool) -> int:
+    """λ|μ pairs ``k`` of the module docstring; 0 when the gate does not fire."""
     from .denoise_rules import CAD_SUPPORT
 
-    if not COARSE or impulsive or presmoothed or outside != 1.0 or willmore != 1.0:
+    if not COARSE or impulsive or outside != 1.0 or willmore != 1.0:
         return 0
     if not (support_fraction < CAD_SUPPORT) or not np.isfinite(gamma):
         return 0

@@ -307,7 +307,7 @@ def _denoise(V, F, *, lam, th, a, robust_iters, feature_iters, mask_update_every
     Vd = fidelity_data(Vd, Vw, impulsive)
     Vi = None if Vd is Vw else Vw
     info = {"tangential_ratio": float("nan"), "support_fraction": float("nan"),
-            "outside_weight": 1.0, "presmoothed": bool(presmoothed),
+            "outside_weight": 1.0,
             "willmore_weight": 1.0, "noise_rho": float("nan"), "noise_length": float("nan"),
             "noise_gamma_scale": float("nan")}
     force = flat = anchor = wedges = None

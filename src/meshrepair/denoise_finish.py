@@ -185,7 +185,7 @@ def finish_result(V, V_out, F, topo, M_E, *, data, sup_v, gamma, gamma_rms, impu
         from . import coarse as _co
 
         gate = dict(support_fraction=info["support_fraction"], outside=info["outside_weight"],
-                    willmore=ww, impulsive=impulsive, presmoothed=info.get("presmoothed", False))
+                    willmore=ww, impulsive=impulsive)
         if _co.coarse_steps(gamma, 0.0, **gate):
             c = _co.curvature_roughness(V_out, F, topo.edges)
             info["coarse_roughness"] = c
