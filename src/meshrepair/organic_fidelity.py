@@ -52,17 +52,39 @@ RHO_WHITE = 1.4
 
 
 def organic_lambda(gamma: float, tangential: float = 0.0, *,
-                   lam_max: float | None = None) -> float:
+                   lam_max: float | None = None, graded: bool = True) -> float:
     """``λ = clip(c / γ̂², 0.05, λ_max)`` (module docstring); ``γ̂`` in mean edge lengths,
     ``c = 0.02`` for noise along the normals (``r_t < 0.65``), ``c = 0.04`` otherwise.
-    A non-finite or non-positive ``γ̂`` (a clean mesh) returns ``λ_max``."""
+
+    ``graded`` (round 11n, :func:`tangential_gain`): for ``r_t ≥ 0.65`` both ``c`` and
+    ``λ_max`` are multiplied by ``g(r_t) = (1 + max(r_t, 1)²) / 2`` (1 for ``r_t ≤ 1``: the
+    law of round 10l unchanged there). The run on a low-passed input
+    (:mod:`meshrepair.presmooth`) passes ``graded=False``: its ``r_t`` reads the filter's
+    residue, not the input's noise. A non-finite or non-positive ``γ̂`` (a clean mesh)
+    returns ``λ_max`` (times ``g``)."""
     from .denoise_rules import TANGENTIAL_MAX
 
-    cap = LAMBDA_MAX if lam_max is None else float(lam_max)
+    g = tangential_gain(tangential) if graded else 1.0
+    cap = (LAMBDA_MAX if lam_max is None else float(lam_max)) * g
     if not np.isfinite(gamma) or gamma <= 0:
         return cap
     c = LAMBDA_SCALE if tangential < TANGENTIAL_MAX else LAMBDA_SCALE_TANGENTIAL
-    return float(np.clip(c / float(gamma) ** 2, 0.05, cap))
+    return float(np.clip(g * c / float(gamma) ** 2, 0.05, cap))
+
+
+def tangential_gain(tangential: float) -> float:
+    """``g(r_t)`` of round 11n: 1 below :data:`meshrepair.denoise_rules.TANGENTIAL_MAX` (noise
+    along the normals) and for ``0.65 ≤ r_t ≤ 1`` (random-direction noise at moderate level
+    reads 0.86-1.22), ``(1 + r_t²) / 2`` above 1: where the tangential part of the input's
+    high-passed umbrella residual dominates its normal part (low random-direction noise on an
+    irregular layout: nicolo γ0.1 random reads 1.85, rocker_arm γ0.1 random 2.22). A NaN
+    ratio (no probe) gives 1."""
+    from .denoise_rules import TANGENTIAL_MAX
+
+    r = float(tangential)
+    if not np.isfinite(r) or r < TANGENTIAL_MAX:
+        return 1.0
+    return 0.5 * (1.0 + max(r, 1.0) ** 2)
 
 
 def applies(support_fraction: float, willmore: float, outside: float, impulsive: bool,
