@@ -16,14 +16,17 @@ from .conftest import shared_mesh
 
 
 def test_gain_is_one_up_to_ratio_one_then_grows_as_its_square():
-    """g(r_t) = 1 for r_t < 0.65 and for 0.65 ≤ r_t ≤ 1, (1 + r_t²)/2 above 1: continuous at
-    1, non-decreasing, NaN gives 1."""
+    """g(r_t) = 1 for r_t < 0.65 and for 0.65 ≤ r_t ≤ 1, (1 + r_t²)/2 above 1 up to the largest
+    trusted read (2.5, g = 3.625): continuous at 1, non-decreasing there; a read above it, and
+    NaN, give 1."""
     for r in (0.0, 0.3, TANGENTIAL_MAX - 1e-9, TANGENTIAL_MAX, 0.9, 1.0, float("nan")):
         assert of.tangential_gain(r) == 1.0
     assert of.tangential_gain(1.0 + 1e-9) == pytest.approx(1.0)
     assert of.tangential_gain(2.0) == pytest.approx(2.5)
-    assert of.tangential_gain(3.0) == pytest.approx(5.0)
-    rs = np.linspace(0.0, 4.0, 401)
+    assert of.tangential_gain(of.GAIN_RATIO_MAX) == pytest.approx(3.625)
+    for r in (of.GAIN_RATIO_MAX + 1e-9, 3.0, 18.6):
+        assert of.tangential_gain(r) == 1.0
+    rs = np.linspace(0.0, of.GAIN_RATIO_MAX, 401)
     g = np.array([of.tangential_gain(r) for r in rs])
     assert np.all(np.diff(g) >= 0)
 
@@ -70,3 +73,33 @@ def test_nicolo_low_random_noise_beats_the_tuned_and_default_peers():
     assert r.params["tangential_ratio"] > 1.0
     assert r.params["lam"] > of.LAMBDA_MAX
     assert msae(r.V, V, F) < 0.98 * 35.8
+
+
+def test_reanchoring_reads_the_residual_at_the_ungraded_weight():
+    """ρ_t √g: the identity at g = 1 (and for g < 1, which the gain never gives), √g times the
+    ratio otherwise; main_lambda records the gain it used (1 when not graded)."""
+    for r in (0.0, 0.3, 0.59):
+        assert of.reanchor_ratio_at_ungraded(r, 1.0) == r
+        assert of.reanchor_ratio_at_ungraded(r, 0.5) == r
+    assert of.reanchor_ratio_at_ungraded(0.553, 1.345) == pytest.approx(0.553 * np.sqrt(1.345))
+    info: dict = {}
+    lam = of.main_lambda(0.065, 1.85, info)
+    assert info["lambda_gain"] == pytest.approx(of.tangential_gain(1.85))
+    assert lam == pytest.approx(of.organic_lambda(0.065, 1.85))
+    lam0 = of.main_lambda(0.065, 1.85, info, graded=False)
+    assert info["lambda_gain"] == 1.0 and lam0 == pytest.approx(of.LAMBDA_MAX)
+
+
+@pytest.mark.shared
+def test_a_graded_weight_does_not_switch_the_reanchoring_on():
+    """nicolo γ0.2 random, seed 5: at round 10l's weight the residual reads ρ_t 0.626 (not
+    re-anchored, MSAE 52.8); the graded weight (g 1.34) shrinks it to 0.550, and re-anchoring
+    there measured 59.0. Read at the ungraded weight it stays off: measured 51.6."""
+    V, F = shared_mesh("nicolo.ply")
+    V0 = add_noise(V, F, 0.2, direction="random", seed=5)
+    r = denoise(V0, F)
+    p = r.params
+    assert p["lambda_gain"] > 1.2
+    assert p["reanchor_ratio"] < 0.6 <= p["reanchor_ratio"] * np.sqrt(p["lambda_gain"])
+    assert p["reanchored"] == 0
+    assert msae(r.V, V, F) < 52.8
