@@ -26,16 +26,19 @@ it weighs more; a false facet ``f`` cut into a smooth surface (``V`` the truth) 
 the truth (docs/parameters.md, round 11k): on CAD parts with Kinect-like noise the candidate
 is closer to the truth on every largest set while ``ρ_S`` reads −0.20 … 1.28 (the real Kinect
 pyramid 0.500: a knife edge at 1/2); on the smooth organic meshes it is farther and ``ρ_S``
-reads −0.18 … 0.095 (the real rabbit scan −0.33), but 0.36-0.45 on a noisy sphere.
+reads −0.18 … 0.095 (the real rabbit scan −0.33, igea −0.05), but 0.36-0.45 on a noisy
+sphere.
 
 **Flat support.** ``G`` is the polish's flatness gate on ``V``
 (:func:`meshrepair.polish.flat_gate`: faces whose neighbourhood of ``r_p`` rings across edges
 not in ``M_E`` has an rms normal spread below ``τ``) at half the polish's threshold,
 ``τ = τ_p / 2 = 2.5 max(1, ℓ)`` degrees, and ``φ_S`` the share of the vertices of ``S`` on a
 face of ``G``. A piecewise-flat part (a CAD part, a scanned box or pyramid) has most of its
-vertices on flat faces; a smooth organic surface few at the noise's scale (measured: the
-Kinect 0.58, CAD parts 0.29-0.71; bunny, spot, the rabbit scan, a sphere 0.03-0.32; at
-``τ_p`` itself the rabbit scan read 0.66 and the Kinect 0.71, no separation).
+vertices on flat faces; a coarse smooth surface few at the noise's scale (measured: the
+Kinect 0.58, CAD parts 0.29-0.71; bunny, spot, the rabbit scan, a sphere 0.00-0.32; at
+``τ_p`` itself the rabbit scan read 0.66 and the Kinect 0.71, no separation). A finely
+sampled smooth surface is flat at that scale too (igea, 134k vertices: 0.51): ``φ`` is a
+prior, not a proof, and such a surface is refused by ``ρ`` (igea −0.05).
 
 **Decision.** ``X`` replaces ``V`` on ``S`` iff
 
@@ -47,7 +50,7 @@ a fifth of the way from ``V`` towards ``X`` (the bias above), elsewhere the data
 ``X`` outright (round 9k). The thresholds sit in the middle of the measured gaps: the Kinect
 reads ``ρ = 0.500, φ = 0.58`` (margins 0.30 and 0.13), the real rabbit scan ``ρ = −0.33,
 φ = 0.32`` (refused on both counts, margins 0.53 and 0.13), the smooth synthetic meshes
-``ρ ≤ 0.095`` or ``φ ≤ 0.24``.
+``ρ ≤ 0.095`` or ``φ ≤ 0.01`` (the sphere, ``ρ`` 0.36-0.45).
 """
 
 from __future__ import annotations
