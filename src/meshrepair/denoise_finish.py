@@ -189,12 +189,19 @@ def finish_result(V, V_out, F, topo, M_E, *, data, sup_v, gamma, gamma_rms, impu
         if pc:
             V_out, info["cad_finish_gated"] = cad_finish(V_out, F, M_E, topo, passes=pc)
             info["cad_finish_passes"] = pc
-    info["sharpened"] = 0.0
+    info.update(sharpened=0.0, sharpen_rho=float("nan"), sharpen_flat=float("nan"))
     sr = sharpen_rule(ww if automatic else 1.0, info["noise_length"])
     if polish and sr is not None:  # correlated noise: rounded creases, kept where data agree
+        from .denoise_rules import SHARPEN_FLAT_SUPPORT
         from .modes import sharpen
 
-        V_out, info["sharpened"] = sharpen(V_out, V, F, M_E, topo, rings=sr)
+        # round 11k: a flat-supported set passes at ρ > 0.2 (meshrepair.sharpen_decision)
+        flat = (pr[0], pr[1]) if SHARPEN_FLAT_SUPPORT and pr is not None else None
+        st: dict = {}
+        V_out, info["sharpened"] = sharpen(V_out, V, F, M_E, topo, rings=sr, flat=flat,
+                                           stats=st)
+        info.update(sharpen_rho=st.get("rho", float("nan")),
+                    sharpen_flat=st.get("flat", float("nan")))
         log.info("crease sharpening (%d rings) kept on %.1f %% of the vertices", sr,
                  100 * info["sharpened"])
     return V_out
