@@ -57,10 +57,12 @@ igea 222.4 → 218.8, E_V ratio 1.13 → 1.11, every hold-out row within +0.4 %.
 
 def _reanchor_smooth(V_in, V_out, F, topo, sup_v, gamma, info):
     """:data:`REANCHOR` on the vertices outside ``sup_v``; records its decision in ``info``."""
+    from .organic_fidelity import reanchor_ratio_at_ungraded
     from .reproject import reanchor, residual_tangential_ratio
 
     ratio = residual_tangential_ratio(V_out, V_in, F)
-    info["reanchor_ratio"] = ratio
+    info["reanchor_ratio"] = ratio  # read at the ungraded data weight (round 11n)
+    ratio = reanchor_ratio_at_ungraded(ratio, info.get("lambda_gain", 1.0))
     if not (ratio < REANCHOR_MAX_RATIO) or gamma > HEAVY_NOISE:
         return V_out
     V_new, w = reanchor(V_out, V_in, F, ~sup_v, topo=topo)
@@ -149,6 +151,7 @@ def finish_result(V, V_out, F, topo, M_E, *, data, sup_v, gamma, gamma_rms, impu
     (nV, 3) float64, the finished vertices
     """
     info["polished"] = 0.0
+    info.setdefault("lambda_gain", 1.0)  # round 11n: the data weight's tangential gain
     # the rule reads the automatic decisions only (a user-set Willmore weight is not a finding)
     pr = polish_rule(max(gamma, gamma_rms), w_cad,
                      ww if automatic else 1.0, info["noise_length"])
