@@ -11,6 +11,8 @@ round) and records its own, in this order:
 4. *organic finish*: one-ring guidance, then the re-integration from the input
    (:mod:`meshrepair.organic`, :func:`~meshrepair.denoise_rules.guidance_rule`,
    :func:`~meshrepair.denoise_rules.reintegrate_rule`);
+4b. *longer low-pass* where the result is smooth at the mesh's resolution (round 11c,
+   :mod:`meshrepair.coarse`);
 5. *CAD finish*: the one-ring guidance on CAD parts (:mod:`meshrepair.cadfinish`);
 6. *crease sharpening* for correlated noise (:func:`~meshrepair.denoise_rules.sharpen_rule`,
    :mod:`meshrepair.modes`).
