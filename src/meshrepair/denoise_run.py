@@ -290,7 +290,7 @@ def _denoise(V, F, *, lam, th, a, robust_iters, feature_iters, mask_update_every
     V_out = finish_result(V, V_out, F, topo, M_E, data=Vd[inv] if reorder else Vd, sup_v=sup_v,
                           gamma=gamma, gamma_rms=gamma_rms, impulsive=impulsive, ww=ww,
                           w_cad=w_cad, automatic=willmore_weight is None, polish=polish,
-                          info=info)
+                          info=info, probe=r1_V)
     n_res_folded = 0
     if unfold and UNFOLD_RESULT and not (info["reintegrate_steps"] and REINTEGRATE_KEEPS_FOLDS
                                            and not impulsive):
