@@ -76,6 +76,7 @@ from dataclasses import replace
 
 import numpy as np
 
+from . import crease_network as _cn
 from ._memory import heap_allocations
 from .denoise_finish import (  # noqa: F401  (re-exported)
     POLISH_DATA,
@@ -336,6 +337,10 @@ def _denoise(V, F, *, lam, th, a, robust_iters, feature_iters, mask_update_every
                 tr = tangential_ratio(Vn_w, Fw, r1.V, topo=topo_w)
         r1_V = r1.V[inv] if reorder else r1.V
         sup = crease_support(topo_w, r1.N, th=th)
+        sup0 = sup
+        sup, net = _cn.supported(topo_w, r1.N, sup, th=th)  # round 11c: a noise network is no CAD
+        info.update(network_branching=net.branching, network_side_spread=net.side_spread,
+                    network_rejected=float(sup0.mean()) if sup is not sup0 else 0.0)
         force = np.where(sup, -1, 0).astype(np.int8)
         sup_v = np.zeros(len(V), bool)
         sup_v[topo_w.edges[sup].ravel()] = True
@@ -371,7 +376,8 @@ def _denoise(V, F, *, lam, th, a, robust_iters, feature_iters, mask_update_every
 
         kp = presmooth_steps(gamma, info["tangential_ratio"],
                              support_fraction=info["support_fraction"],
-                             outside=info["outside_weight"], willmore=ww, impulsive=impulsive)
+                             outside=info["outside_weight"], willmore=ww, impulsive=impulsive,
+                             heavy=_cn.heavy_from_network(info["network_rejected"]))
         if kp:  # coarse-to-fine: the whole model runs again on the low-passed input
             log.info("heavy noise on an organic mesh: %d Taubin pairs on the input first", kp)
             Vp = presmooth(V, topo.edges, np.ones(len(V), bool), kp)  # every vertex (10h)
@@ -385,6 +391,7 @@ def _denoise(V, F, *, lam, th, a, robust_iters, feature_iters, mask_update_every
                          regions=regions, callback=callback, polish=False,  # 10h: not polished
                          presmoothed=True)
             r.params.update(presmooth_steps=kp, presmooth_noise_estimate=r.noise_estimate,
+                            presmooth_network_rejected=info["network_rejected"],
                             presmooth_tangential_ratio=info["tangential_ratio"])
             r.noise_estimate = gamma
             return r
