@@ -38,27 +38,43 @@ def test_branching_counts_junction_vertices():
     assert np.isnan(cn.branching(np.zeros((0, 2), int), 3))
 
 
+def _reads(topo, N):
+    cre = creased_edges(topo, N, 30.0)
+    return cn.chain_reads(topo, N, cre, long_chains(topo, cre, 30)), cre
+
+
 def test_side_spread_is_zero_beside_a_roof_edge_and_large_on_rough_sides():
-    """Two planes meeting at a 60° roof: the sides of every chain edge are flat, s = 0, β = 0,
-    not a noise network. The same roof with heavy normal noise on the faces' normals is."""
+    """Two planes meeting at a 60° roof: one chain, flat sides (s = 0), no junction (β = 0):
+    not noise, and the support keeps it. The same roof with rough normals everywhere: a
+    branched network with rough sides, every chain of it dropped."""
     V, F = _strip(ROOF, ny=40)
     topo = edge_topology(F, len(V))
     N = face_normals(V, F)
-    st = cn.network_statistics(topo, N)
-    assert st.n_edges == 40 and st.branching == 0.0
-    assert st.side_spread == pytest.approx(0.0, abs=1e-6)
-    assert not cn.is_noise_network(st)
-    cre = creased_edges(topo, N, 30.0)
-    s = cn.side_spreads(topo, N, cre, np.flatnonzero(long_chains(topo, cre, 30)))
-    assert np.allclose(s, 0.0, atol=1e-6)
-    # rough normals everywhere: many creased edges, joined into a branched network
+    (idx, g, beta, spread), cre = _reads(topo, N)
+    assert len(idx) == 40 and len(beta) == 1 and beta[0] == 0.0
+    assert spread[0] == pytest.approx(0.0, abs=1e-6)
+    assert not cn.is_noise_chain(beta, spread).any()
+    sup, read = cn.supported(topo, N)
+    assert sup.any() and read.dropped == 0 and read.rejected == 0.0
     rng = np.random.default_rng(3)
-    Nn = N + 0.9 * rng.normal(size=N.shape)
+    Nn = N + 0.6 * rng.normal(size=N.shape)
     Nn /= np.linalg.norm(Nn, axis=1, keepdims=True)
-    st2 = cn.network_statistics(topo, Nn)
-    assert st2.n_edges > 100
-    assert st2.branching > cn.BRANCHING and st2.side_spread > cn.SIDE_SPREAD
-    assert cn.is_noise_network(st2)
+    (idx2, g2, beta2, spread2), _ = _reads(topo, Nn)
+    big = np.bincount(g2) >= 60
+    assert big.any()
+    assert (beta2[big] > cn.BRANCHING).all() and (spread2[big] > cn.SIDE_SPREAD).all()
+    sup2, read2 = cn.supported(topo, Nn)
+    assert read2.dropped >= big.sum() and read2.rejected > 0.0
+    assert cn.heavy_from_network(read2.rejected)
+
+
+def test_a_face_closed_in_by_creases_has_no_flat_side():
+    """Every edge creased: the sides are the faces themselves, s = ∞ (not 0)."""
+    V, F = _strip(ROOF, ny=10)
+    topo = edge_topology(F, len(V))
+    cre = np.ones(topo.n_edges, bool)
+    e = np.flatnonzero(topo.interior)[:5]
+    assert np.isinf(cn.side_spreads(topo, face_normals(V, F), cre, e)).all()
 
 
 def test_statistics_invariant_under_similarity():
@@ -67,17 +83,16 @@ def test_statistics_invariant_under_similarity():
     Vn = add_noise(V, F, 0.4, direction="normal", seed=1)
     topo = edge_topology(F, len(V))
     R = trimesh.transformations.random_rotation_matrix(np.random.default_rng(2).random(3))[:3, :3]
-    a = cn.network_statistics(topo, face_normals(Vn, F))
-    b = cn.network_statistics(topo, face_normals(3.7 * Vn @ R.T + 5.0, F))
-    assert a.n_edges == b.n_edges
-    assert a.branching == pytest.approx(b.branching)
-    assert a.side_spread == pytest.approx(b.side_spread, rel=1e-9)
+    (ia, ga, ba, sa), _ = _reads(topo, face_normals(Vn, F))
+    (ib, gb, bb, sb), _ = _reads(topo, face_normals(3.7 * Vn @ R.T + 5.0, F))
+    assert np.array_equal(ia, ib) and np.array_equal(ga, gb)
+    assert np.allclose(ba, bb) and np.allclose(sa, sb, rtol=1e-9)
 
 
-def test_empty_network_is_not_noise_and_support_is_kept():
-    st = cn.NetworkStatistics(float("nan"), float("nan"), 0)
-    assert not cn.is_noise_network(st)
+def test_empty_network_reads_nothing():
     assert not cn.heavy_from_network(0.0) and cn.heavy_from_network(0.3)
+    z = np.zeros(0)
+    assert cn.is_noise_chain(z, z).shape == (0,)
 
 
 def test_spot_under_heavy_normal_noise_is_not_a_cad_part():
@@ -91,6 +106,7 @@ def test_spot_under_heavy_normal_noise_is_not_a_cad_part():
     r = denoise(Vn, F)
     p = r.params
     assert p["presmooth_network_rejected"] >= 0.2  # it would have been read as a CAD part
+    assert p["support_fraction"] < 0.2
     assert p["presmooth_steps"] > 0 and p["outside_weight"] == 1.0
     assert p["cad_finish_passes"] == 0
     ours, tau = msae(r.V, V, F), msae(taubin_smooth(Vn, F), V, F)
@@ -115,7 +131,7 @@ def test_noisy_fandisk_keeps_its_cad_read(gamma):
     Vn = add_noise(V, F, gamma, direction="normal", seed=1)
     r = denoise(Vn, F)
     p = r.params
-    assert p["network_rejected"] == 0.0
+    assert p["network_dropped"] == 0 and p["network_rejected"] == 0.0
     assert p["network_branching"] < 0.1 and p["network_side_spread"] < 4.0
     assert p["support_fraction"] >= 0.2 and p["outside_weight"] > 1.0
 

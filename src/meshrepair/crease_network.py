@@ -1,4 +1,4 @@
-"""Is the probe's crease network a CAD part's creases, or noise? (issue 12, round 11c).
+r"""Is a crease chain of the probe a CAD part's crease, or noise? (issue 12, round 11c).
 
 :func:`meshrepair.regions.crease_support` keeps every chain of at least ``L_long = 60`` creased
 edges of the robust probe's normals ``N¹`` as it is. On a CAD part those chains are its
@@ -6,50 +6,57 @@ creases. On a smooth organic mesh under heavy normal noise (spot γ0.4, ≈ 3k v
 leaves dihedrals above ``th`` all over the surface, and they join into long chains too: the
 supported region then covers 36-50 % of the edges, the mesh is read as a CAD part (the outside
 weight, the discrepancy test, the CAD finish) and the result loses to a plain Taubin filter.
-Length does not tell these apart; the *shape* of the network does.
+Length does not tell these apart; the *shape* of a chain does.
 
-Let ``C_L`` be the creased edges of ``N¹`` (dihedral > ``th``) in chains of at least ``L``
-edges (the chains :func:`meshrepair.regions.long_chains` returns), ``V_C`` their vertices and
-``d(v)`` the number of edges of ``C_L`` at ``v``. Two statistics:
+For a chain ``c`` (a connected component of the creased edges kept by
+:func:`meshrepair.regions.crease_support`, before its dilation), ``V_c`` its vertices and
+``d(v)`` the number of its edges at ``v``, two statistics:
 
-* the **branching** of the network,
+* the **branching** of the chain,
 
-  .. math:: β = \\frac{|\\{v \\in V_C : d(v) \\ge 3\\}|}{|V_C|}.
+  .. math:: β_c = \frac{|\{v \in V_c : d(v) \ge 3\}|}{|V_c|}.
 
   A CAD part's creases are polylines that meet at its corners: ``d(v) = 2`` along a crease,
   ``d(v) ≥ 3`` at a corner and where noise makes the crease zigzag across a triangle, so β is
-  small (0.04-0.16 on fandisk, twelve, sharp_sphere, trim_star and screwdriver at γ 0.1-0.7).
-  The edges of a smooth surface whose probe dihedral exceeds ``th`` at heavy noise are where
-  the noise happened to be large: they form a random network with junctions everywhere
-  (spot γ0.4 normal: β = 0.29-0.33).
+  small (0.02-0.16 per chain on fandisk, twelve, sharp_sphere, trim_star and screwdriver at
+  γ 0.1-0.7, most below 0.1). The edges of a smooth surface whose probe dihedral exceeds ``th``
+  at heavy noise are where the noise happened to be large: they form a random network with
+  junctions everywhere (spot γ0.4 normal: 0.27-0.47 on its chains of ≥ 60 edges).
 
-* the **side spread** (the ``s`` of :func:`meshrepair.regions.chain_statistics`, here the
-  median over every edge of ``C_L``, not per chain): for a chain edge with faces ``a``, ``b``,
-  the faces within ``k = 2`` steps of ``a`` (of ``b``) across edges that are not creased,
-  ``S_a``, ``S_b``, with mean normals ``m_a``, ``m_b``;
+* the **side spread** (the ``s`` of :func:`meshrepair.regions.chain_statistics`): for a chain
+  edge with faces ``a``, ``b``, the faces within ``k = 2`` steps of ``a`` (of ``b``) across
+  edges that are not creased, ``S_a``, ``S_b``, with mean normals ``m_a``, ``m_b``;
 
-  .. math:: s = \\operatorname{med}_{e \\in C_L} \\tfrac12 \\big(
-            \\operatorname{mean}_{f \\in S_a} \\angle(N¹_f, m_a) +
-            \\operatorname{mean}_{f \\in S_b} \\angle(N¹_f, m_b)\\big).
+  .. math:: s_c = \operatorname{med}_{e \in c} \tfrac12 \big(
+            \operatorname{mean}_{f \in S_a} \angle(N¹_f, m_a) +
+            \operatorname{mean}_{f \in S_b} \angle(N¹_f, m_b)\big).
 
   The probe is a total-variation-like smoother: on a CAD part both sides of a crease come out
-  nearly flat (s = 2.0-5.7°); beside a noise chain the surface is as rough as anywhere else on
-  the mesh (spot: 6.3-9.1°). A face all of whose edges are creased has no side at all (``S_a =
-  {a}``): its edge reads ``s = ∞`` (no flat side), so a network so dense that it isolates the
-  faces reads as rough, not as flat.
+  nearly flat (2.4-6.1° per chain); beside a noise chain the surface is as rough as anywhere
+  else on the mesh (spot: 5.3-10.1°). A face all of whose edges are creased has no side at all
+  (``S_a = {a}``): its edge reads ``s = ∞`` (no flat side), so a network so dense that it
+  isolates the faces reads as rough, not as flat.
 
-The network is called **noise** when both read so:
+A chain is **noise** when both read so, and is then dropped from the crease support:
 
-.. math:: \\text{noise} \\iff β > β_0 \\;\\wedge\\; s > s_0, \\qquad β_0 = 0.2,\\; s_0 = 5.5°,
+.. math:: \text{noise}(c) \iff β_c > β_0 \;\wedge\; s_c > s_0, \qquad β_0 = 0.2,\;
+          s_0 = 5.5°.
 
-and then no crease is supported: the region ``C`` is empty, and the mesh follows the schedule of
-a smooth surface (:mod:`meshrepair.lowpass`, :mod:`meshrepair.presmooth`, the organic finish).
 ``s_0`` is the side-spread bound of the short-chain test of :mod:`meshrepair.regions`
-(:data:`meshrepair.regions.SIDE_SPREAD`), ``β_0`` lies between the CAD parts' largest reading
-(0.16, sharp_sphere γ0.7) and the organic networks' smallest where the region covers ≥ 20 %
-(0.29). Requiring both keeps a CAD part whose sides are curved (screwdriver γ0.4: s 5.7°, β
-0.07) or whose network branches (sharp_sphere γ0.7: β 0.16, s 4.2°). Measured in
-docs/parameters.md (round 11c).
+(:data:`meshrepair.regions.SIDE_SPREAD`); ``β_0`` lies between the CAD parts' chains and the
+noise chains of spot γ0.4. Requiring both keeps a CAD crease whose sides are curved
+(screwdriver γ0.4: s up to 6.1°, β 0.08) or whose network branches at corners (sharp_sphere
+γ0.7: β up to 0.17, s 4.2°). The test is per chain, so a CAD part whose probe also left a few
+noise chains keeps its creases (sharp_sphere γ0.4, seed 8: the mesh-wide statistics read β 0.24,
+s 6.4°).
+
+**The noise is heavy for this mesh** (:func:`heavy_from_network`) when dropping the noise
+chains removed part of the crease support: such chains appear only where the noise is large
+against the local triangle size, whatever the one-ring level γ̂ in mean edge lengths reads
+(camelhead, whose triangles vary widely in size, reads γ̂ 0.25 at γ 0.3). Then the gate of the
+low-pass of the input (:func:`meshrepair.presmooth.presmooth_steps`, ``heavy=True``) does not
+ask for ``γ_t > 0.32``; its other conditions (an organic mesh, white noise, not impulsive) and
+its length ``k`` are unchanged. Measured in docs/parameters.md (round 11c).
 
 Both statistics read angles and the mesh's connectivity only: they are invariant under rigid
 motions and uniform scaling.
@@ -68,16 +75,6 @@ NOISE_NETWORK = True
 BRANCHING = 0.2
 SIDE_SPREAD = 5.5
 SIDE_RINGS = 2
-
-
-@dataclass(frozen=True)
-class NetworkStatistics:
-    """Branching ``β`` and median side spread ``s`` (degrees) of a crease network; ``n_edges``
-    its size (NaN statistics for an empty network)."""
-
-    branching: float
-    side_spread: float
-    n_edges: int
 
 
 def branching(edges: np.ndarray, n_vertices: int) -> float:
@@ -118,43 +115,91 @@ def side_spreads(topo: Topology, N: np.ndarray, creased: np.ndarray, chain_edges
     return out
 
 
-def network_statistics(topo: Topology, N: np.ndarray, th: float = 30.0) -> NetworkStatistics:
-    """The statistics of the module docstring for the long chains (``L`` of
-    :func:`meshrepair.regions.crease_support`) of edges creased by more than ``th`` degrees in
-    the face normals ``N`` ``(nF, 3)``."""
-    from .regions import CHAIN_FRACTION, MIN_CHAIN, creased_edges, long_chains
+def chain_reads(topo: Topology, N: np.ndarray, creased: np.ndarray, chains: np.ndarray
+                ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Per chain (connected component of ``chains``, a ``(nE,)`` bool mask), its branching
+    ``β_c`` and side spread ``s_c`` (module docstring), with ``creased`` the mask the sides do
+    not cross.
 
-    L = min(MIN_CHAIN, max(1, int(np.ceil(CHAIN_FRACTION * topo.n_edges))))
-    cre = creased_edges(topo, N, th)
-    idx = np.flatnonzero(long_chains(topo, cre, L))
+    Returns
+    -------
+    (idx, group, beta, spread) : the chain edges ``(k,)``, their chain index ``(k,)`` and per
+    chain ``β_c`` and ``s_c`` in degrees ``(n_chains,)``
+    """
+    from . import _kernels as _k
+    from .regions import _group_median
+
+    idx = np.flatnonzero(chains)
     if len(idx) == 0:
-        return NetworkStatistics(float("nan"), float("nan"), 0)
-    s = float(np.median(side_spreads(topo, N, cre, idx)))
-    return NetworkStatistics(branching(topo.edges[idx], topo.n_vertices), s, len(idx))
+        z = np.zeros(0)
+        return idx, idx.copy(), z, z
+    e = topo.edges[idx]
+    lab_v = _k.union_find(topo.n_vertices, e[:, 0], e[:, 1])
+    u, g = np.unique(lab_v[e[:, 0]], return_inverse=True)
+    d = np.bincount(e.ravel(), minlength=topo.n_vertices)  # chains are vertex-disjoint
+    on = np.flatnonzero(d > 0)
+    gv = np.searchsorted(u, lab_v[on])
+    n_v = np.bincount(gv, minlength=len(u))
+    beta = np.bincount(gv, (d[on] >= 3).astype(np.float64), minlength=len(u)) / n_v
+    spread = _group_median(side_spreads(topo, N, creased, idx), g, len(u))
+    return idx, g, beta, spread
 
 
-def is_noise_network(stats: NetworkStatistics, *, branching_max: float = BRANCHING,
-                     side_spread_max: float = SIDE_SPREAD) -> bool:
-    """``β > β_0 ∧ s > s_0`` (module docstring); an empty network is not noise."""
-    return bool(NOISE_NETWORK and stats.n_edges > 0 and stats.branching > branching_max
-                and stats.side_spread > side_spread_max)
+def is_noise_chain(beta, spread, *, branching_max: float = BRANCHING,
+                   side_spread_max: float = SIDE_SPREAD):
+    """``β_c > β_0 ∧ s_c > s_0`` (module docstring), elementwise."""
+    return (np.asarray(beta) > branching_max) & (np.asarray(spread) > side_spread_max)
 
 
-def supported(topo: Topology, N: np.ndarray, support: np.ndarray, th: float = 30.0
-              ) -> tuple[np.ndarray, NetworkStatistics]:
-    """``support`` (the region of :func:`meshrepair.regions.crease_support`), emptied when the
-    network of creased chains reads as noise; with the statistics read."""
-    stats = network_statistics(topo, N, th)
-    if support.any() and is_noise_network(stats):
-        return np.zeros_like(support), stats
-    return support, stats
+@dataclass
+class NetworkRead:
+    """What :func:`supported` read: the branching and median side spread over every kept chain
+    (NaN when there is none), the chains dropped as noise and the fraction of the edges whose
+    support they removed."""
+
+    branching: float = float("nan")
+    side_spread: float = float("nan")
+    n_chains: int = 0
+    dropped: int = 0
+    rejected: float = 0.0
+
+
+def drop_noise_chains(topo: Topology, N: np.ndarray, creased: np.ndarray, chains: np.ndarray,
+                      read: NetworkRead | None = None) -> np.ndarray:
+    """``chains`` without its noise chains (:func:`is_noise_chain`); the
+    ``chain_filter`` of :func:`meshrepair.regions.crease_support`. ``read`` is filled in."""
+    idx, g, beta, spread = chain_reads(topo, N, creased, chains)
+    out = chains.copy()
+    if len(idx) == 0:
+        return out
+    bad = is_noise_chain(beta, spread) if NOISE_NETWORK else np.zeros(len(beta), bool)
+    out[idx[bad[g]]] = False
+    if read is not None:
+        read.branching = branching(topo.edges[idx], topo.n_vertices)
+        read.side_spread = float(np.median(spread[g]))
+        read.n_chains, read.dropped = len(beta), int(bad.sum())
+    return out
+
+
+def supported(topo: Topology, N: np.ndarray, th: float = 30.0
+              ) -> tuple[np.ndarray, NetworkRead]:
+    """The crease-supported region of :func:`meshrepair.regions.crease_support` without the
+    noise chains, and what was read (``rejected``: the fraction of the edges the dropped chains
+    supported, 0 when none was dropped)."""
+    from .regions import crease_support
+
+    read = NetworkRead()
+    sup = crease_support(topo, N, th=th,
+                         chain_filter=lambda t, n, c, ch: drop_noise_chains(t, n, c, ch, read))
+    if read.dropped:
+        read.rejected = float(crease_support(topo, N, th=th).mean() - sup.mean())
+    return sup, read
 
 
 HEAVY_FROM_NETWORK = True
-HEAVY_SUPPORT = 0.0
 
 
 def heavy_from_network(rejected_fraction: float) -> bool:
-    """Whether a rejected noise network says the noise is heavy for this mesh: it would have
-    covered more than :data:`HEAVY_SUPPORT` of the edges."""
-    return bool(HEAVY_FROM_NETWORK and rejected_fraction > HEAVY_SUPPORT)
+    """Whether dropped noise chains say the noise is heavy for this mesh (module docstring):
+    they had supported part of the edges."""
+    return bool(HEAVY_FROM_NETWORK and rejected_fraction > 0.0)

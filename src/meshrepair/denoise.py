@@ -124,7 +124,7 @@ from .denoise_rules import (  # noqa: F401  (re-exported: the rules read from th
 )
 from .errors import MeshRepairError
 from .noise import noise_statistics
-from .regions import crease_support, flat_edges
+from .regions import flat_edges
 from .relax import untangle
 from .reorder import _edge_values_to, locality_order  # noqa: F401  (re-exported)
 from .scale import noise_scale, tangential_ratio
@@ -336,11 +336,9 @@ def _denoise(V, F, *, lam, th, a, robust_iters, feature_iters, mask_update_every
                                 topo=topo_w).solve(Vd, Vi)
                 tr = tangential_ratio(Vn_w, Fw, r1.V, topo=topo_w)
         r1_V = r1.V[inv] if reorder else r1.V
-        sup = crease_support(topo_w, r1.N, th=th)
-        sup0 = sup
-        sup, net = _cn.supported(topo_w, r1.N, sup, th=th)  # round 11c: a noise network is no CAD
+        sup, net = _cn.supported(topo_w, r1.N, th=th)  # crease support without noise chains
         info.update(network_branching=net.branching, network_side_spread=net.side_spread,
-                    network_rejected=float(sup0.mean()) if sup is not sup0 else 0.0)
+                    network_dropped=net.dropped, network_rejected=net.rejected)  # round 11c
         force = np.where(sup, -1, 0).astype(np.int8)
         sup_v = np.zeros(len(V), bool)
         sup_v[topo_w.edges[sup].ravel()] = True
