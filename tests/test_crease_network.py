@@ -68,13 +68,24 @@ def test_side_spread_is_zero_beside_a_roof_edge_and_large_on_rough_sides():
     assert cn.heavy_from_network(read2.rejected)
 
 
-def test_a_face_closed_in_by_creases_has_no_flat_side():
-    """Every edge creased: the sides are the faces themselves, s = ∞ (not 0)."""
+def test_a_face_closed_in_by_creases_gives_no_evidence():
+    """Every edge creased: no side exists, s = NaN (not 0, not ∞); a regular tetrahedron (every
+    vertex a junction, β = 1, every face closed in) is therefore not a noise network."""
     V, F = _strip(ROOF, ny=10)
     topo = edge_topology(F, len(V))
     cre = np.ones(topo.n_edges, bool)
     e = np.flatnonzero(topo.interior)[:5]
-    assert np.isinf(cn.side_spreads(topo, face_normals(V, F), cre, e)).all()
+    assert np.isnan(cn.side_spreads(topo, face_normals(V, F), cre, e)).all()
+    TV = np.array([[1, 1, 1], [1, -1, -1], [-1, 1, -1], [-1, -1, 1.0]])
+    TF = np.array([[0, 1, 2], [0, 3, 1], [0, 2, 3], [1, 3, 2]])
+    t = edge_topology(TF, 4)
+    N = face_normals(TV, TF)
+    cre_t = creased_edges(t, N, 30.0)
+    idx, g, beta, spread = cn.chain_reads(t, N, cre_t, long_chains(t, cre_t, 1))
+    assert len(idx) == 6 and beta[0] == 1.0 and np.isnan(spread[0])
+    assert not cn.is_noise_chain(beta, spread).any()
+    sup, read = cn.supported(t, N)
+    assert read.dropped == 0 and sup.all()
 
 
 def test_statistics_invariant_under_similarity():

@@ -34,8 +34,10 @@ For a chain ``c`` (a connected component of the creased edges kept by
   The probe is a total-variation-like smoother: on a CAD part both sides of a crease come out
   nearly flat (2.4-6.1° per chain); beside a noise chain the surface is as rough as anywhere
   else on the mesh (spot: 5.3-10.1°). A face all of whose edges are creased has no side at all
-  (``S_a = {a}``): its edge reads ``s = ∞`` (no flat side), so a network so dense that it
-  isolates the faces reads as rough, not as flat.
+  (``S_a = {a}``) and gives no evidence: an edge is averaged over the sides it has, an edge
+  with none is left out of the medians, and a chain (or network) with no side at all reads
+  ``s`` = NaN, never noise (a regular tetrahedron: every face closed in by its creases, every
+  vertex a junction, β = 1).
 
 The same two statistics over the whole network (``β`` of every kept chain edge together, ``s``
 the median over all of them) say whether noise made chains on this mesh at all. A chain is
@@ -111,7 +113,7 @@ def side_spreads(topo: Topology, N: np.ndarray, creased: np.ndarray, chain_edges
     if n == 0:
         return np.zeros(0)
     Af = _side_adjacency(topo, creased, nF)
-    out = np.zeros(n)
+    tot, cnt_sides = np.zeros(n), np.zeros(n)
     for j in range(2):
         S = sp.csr_matrix((np.ones(n), (np.arange(n), topo.edge_faces[ce, j])), shape=(n, nF))
         for _ in range(int(rings)):
@@ -120,10 +122,12 @@ def side_spreads(topo: Topology, N: np.ndarray, creased: np.ndarray, chain_edges
         r, c = S.nonzero()
         dev = _angle(N[c], (S @ N)[r])
         cnt = np.bincount(r, minlength=n)
-        # a face every edge of which is creased has no side to be flat: no bound on its spread
-        out += np.where(cnt > 1, 0.5 * np.bincount(r, dev, minlength=n) / np.maximum(cnt, 1),
-                        np.inf)
-    return out
+        # a face every edge of which is creased has no side: no evidence either way
+        has = cnt > 1
+        tot += np.where(has, np.bincount(r, dev, minlength=n) / np.maximum(cnt, 1), 0.0)
+        cnt_sides += has
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return np.where(cnt_sides > 0, tot / np.maximum(cnt_sides, 1), np.nan)
 
 
 def chain_reads(topo: Topology, N: np.ndarray, creased: np.ndarray, chains: np.ndarray,
@@ -154,7 +158,11 @@ def chain_reads(topo: Topology, N: np.ndarray, creased: np.ndarray, chains: np.n
     n_v = np.bincount(gv, minlength=len(u))
     beta = np.bincount(gv, (d[on] >= 3).astype(np.float64), minlength=len(u)) / n_v
     s_e = side_spreads(topo, N, creased, idx)
-    spread = _group_median(s_e, g, len(u))
+    spread = np.full(len(u), np.nan)
+    ok = np.isfinite(s_e)
+    if ok.any():  # median over the edges that have a side; NaN for a chain with none
+        has = np.unique(g[ok])
+        spread[has] = _group_median(s_e[ok], np.searchsorted(has, g[ok]), len(has))
     return (idx, g, beta, spread, s_e) if per_edge else (idx, g, beta, spread)
 
 
@@ -185,7 +193,9 @@ def drop_noise_chains(topo: Topology, N: np.ndarray, creased: np.ndarray, chains
     out = chains.copy()
     if len(idx) == 0:
         return out
-    b_net, s_net = branching(topo.edges[idx], topo.n_vertices), float(np.median(s_edges))
+    fin = s_edges[np.isfinite(s_edges)]
+    b_net = branching(topo.edges[idx], topo.n_vertices)
+    s_net = float(np.median(fin)) if len(fin) else float("nan")
     bad = np.zeros(len(beta), bool)
     if NOISE_NETWORK and is_noise_chain(b_net, s_net):  # noise made chains here at all
         bad = is_noise_chain(beta, spread)  # and these are they
