@@ -18,10 +18,11 @@ For a chain ``c`` (a connected component of the creased edges kept by
 
   A CAD part's creases are polylines that meet at its corners: ``d(v) = 2`` along a crease,
   ``d(v) ≥ 3`` at a corner and where noise makes the crease zigzag across a triangle, so β is
-  small (0.02-0.16 per chain on fandisk, twelve, sharp_sphere, trim_star and screwdriver at
-  γ 0.1-0.7, most below 0.1). The edges of a smooth surface whose probe dihedral exceeds ``th``
-  at heavy noise are where the noise happened to be large: they form a random network with
-  junctions everywhere (spot γ0.4 normal: 0.27-0.47 on its chains of ≥ 60 edges).
+  small (0.00-0.22 per chain on fandisk, twelve, trim_star and screwdriver at γ 0.1-0.7; up to
+  0.41 on single chains of sharp_sphere; 0.02-0.18 over each whole network). The edges of a
+  smooth surface whose probe dihedral exceeds ``th`` at heavy noise are where the noise
+  happened to be large: they form a random network with junctions everywhere (spot γ0.4
+  normal: 0.19-0.46 per chain, 0.30-0.36 over the network).
 
 * the **side spread** (the ``s`` of :func:`meshrepair.regions.chain_statistics`): for a chain
   edge with faces ``a``, ``b``, the faces within ``k = 2`` steps of ``a`` (of ``b``) across
@@ -32,12 +33,13 @@ For a chain ``c`` (a connected component of the creased edges kept by
             \operatorname{mean}_{f \in S_b} \angle(N¹_f, m_b)\big).
 
   The probe is a total-variation-like smoother: on a CAD part both sides of a crease come out
-  nearly flat (2.4-6.1° per chain); beside a noise chain the surface is as rough as anywhere
-  else on the mesh (spot: 5.3-10.1°). A face all of whose edges are creased has no side at all
-  (``S_a = {a}``) and gives no evidence: an edge is averaged over the sides it has, an edge
-  with none is left out of the medians, and a chain (or network) with no side at all reads
-  ``s`` = NaN, never noise (a regular tetrahedron: every face closed in by its creases, every
-  vertex a junction, β = 1).
+  nearly flat (2.0-7.6° per chain, 2.0-5.2° over the network but for screwdriver's curved
+  sides, up to 7.6°); beside a noise chain the surface is as rough as anywhere else on the
+  mesh (spot γ0.4: 6.0-9.8° per chain, 7.5-8.1° over the network). A face all of whose edges
+  are creased has no side at all (``S_a = {a}``) and gives no evidence: an edge is averaged
+  over the sides it has, an edge with none is left out of the medians, and a chain (or
+  network) with no side at all reads ``s`` = NaN, never noise (a regular tetrahedron: every
+  face closed in by its creases, every vertex a junction, β = 1).
 
 The same two statistics over the whole network (``β`` of every kept chain edge together, ``s``
 the median over all of them) say whether noise made chains on this mesh at all. A chain is
@@ -54,10 +56,10 @@ part whose probe also left noise chains (sharp_sphere γ0.4 seed 8: the network 
 s 6.4°, six of its ten chains are noise and four, 0.24 of the edges, are kept).
 
 ``s_0`` is the side-spread bound of the short-chain test of :mod:`meshrepair.regions`
-(:data:`meshrepair.regions.SIDE_SPREAD`); ``β_0`` lies between the CAD parts' chains and the
-noise chains of spot γ0.4. Requiring both keeps a CAD crease whose sides are curved
-(screwdriver γ0.4: s up to 6.1°, β 0.08) or whose network branches at corners (sharp_sphere
-γ0.7: β up to 0.17, s 4.2°).
+(:data:`meshrepair.regions.SIDE_SPREAD`); ``β_0`` lies between the CAD networks (≤ 0.18) and
+spot γ0.4's (≥ 0.30). Requiring both keeps a CAD part whose sides are curved (screwdriver:
+network s up to 7.6°, β ≤ 0.18) or whose network branches (sharp_sphere γ0.7: β up to 0.16,
+s 4.2°).
 
 **The noise is heavy for this mesh** (:func:`heavy_from_network`) when the dropped noise
 chains had supported more than ``f_h = 4 %`` of the edges: noise that is large against the
