@@ -6,7 +6,7 @@ length ``ℓ = √m``), but such noise usually reads a tangential ratio ``r_t �
 high-passed normal part is small), so the Willmore weight stays 1 and the schedule treats it as
 white: the one-ring low-pass of :mod:`meshrepair.lowpass` (``k = 1-2`` pairs) and the one-ring
 guidance of :mod:`meshrepair.organic` act at the wrong scale and leave the bumps (synthetic
-``correlated_noise`` m = 4, γ = 0.5 on nicolo / pierrot / bunny: about 45-55 % of the error is
+``correlated_noise`` m = 4, γ = 0.5 on nicolo / pierrot / igea: 49-60 % of the noisy MSAE is
 left; docs/parameters.md, round 11q).
 
 **The step.** Taubin's λ|μ filter (1995, :func:`meshrepair.lowpass.taubin_region`, full step,
@@ -29,7 +29,7 @@ profile correlated, ``ρ ≥ ρ_0 = 1.4`` (white Gaussian inputs read 0.83-1.12,
 false positives of low noise on irregular meshes up to 1.35, the real Kinect scan 1.22), and
 the one-ring level above ``γ_0 = 0.095``: below it the solve has already taken the roughness and
 what is left is mostly the surface's own relief, which a long low-pass removes (m = 4 γ = 0.3
-and m = 8 γ = 0.6 rows read γ̂ 0.068-0.084 and lose 1-5 % from the first 10 pairs; the m = 4
+and m = 8 γ = 0.6 rows read γ̂ 0.068-0.084 and lose 0.6-5.4 % from the first 10 pairs; the m = 4
 γ = 0.5 rows read 0.102-0.110 and gain 4-18 %). Values read off the design rows of
 docs/parameters.md, round 11q (bunny, nicolo and the published truths igea, pierrot).
 The readings are those of the first run (the input), also when the coarse-to-fine run of
