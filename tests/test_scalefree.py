@@ -67,3 +67,76 @@ def test_every_shared_input_keeps_the_relative_stop():
             continue
         m = read_mesh(p)
         assert tolerance_factor(m.V, m.F) == 1.0, p.name
+
+
+def _box(k):
+    m = trimesh.creation.box(extents=(1.0, 0.7, 0.5))
+    V, F = np.asarray(m.vertices, float), np.asarray(m.faces, np.int64)
+    for _ in range(k):
+        V, F = trimesh.remesh.subdivide(V, F)
+    return V, F
+
+
+def _probe_support(V, F, N):
+    from meshrepair.regions import crease_support
+    from meshrepair.topology import edge_topology
+
+    topo = edge_topology(F, len(V))
+    return topo, crease_support(topo, N)
+
+
+def test_cad_support_of_a_box_does_not_depend_on_its_resolution():
+    """f ∝ 1/q for a crease network, f_ref = max(f, f_g q / Q_c) does not: the box's exact
+    normals, subdivided 5 and 6 times (q ≈ 18 and 36), give the same f q within 10 %, and the
+    finer one, whose raw f is below 0.2, reads f_ref = f q / Q_c ≥ 0.2."""
+    from meshrepair.geometry import face_normals
+    from meshrepair.scalefree import Q_CAD, cad_support, crease_like_share
+
+    out = []
+    for k in (5, 6):
+        V, F = _box(k)
+        N = face_normals(V, F)
+        topo, sup = _probe_support(V, F, N)
+        assert crease_like_share(topo, N, sup) == pytest.approx(sup.mean())  # all crease-like
+        q = radius_in_edges(V, F, topo.edges)
+        assert q == pytest.approx(radius_in_edges(V, F), rel=1e-12)  # same unique edges
+        out.append((sup.mean(), q, cad_support(topo, N, sup, q)))
+    (f5, q5, _), (f6, q6, r6) = out
+    assert q6 == pytest.approx(2 * q5, rel=0.05)
+    assert f6 < 0.6 * f5 and f6 < 0.2  # the raw fraction falls with the resolution
+    assert f6 * q6 == pytest.approx(f5 * q5, rel=0.10)
+    assert r6 == pytest.approx(f6 * q6 / Q_CAD, rel=1e-12)
+    assert r6 >= 0.2
+
+
+def test_noise_creases_on_a_sphere_are_not_crease_like():
+    """Jittered normals (25° rms) on a smooth sphere make long chains of creased edges; their
+    sides are not flat (s > 5.5°), so none counts: f_ref = f."""
+    from meshrepair.geometry import face_normals
+    from meshrepair.scalefree import cad_support, crease_like_share
+
+    m = trimesh.creation.icosphere(subdivisions=5)
+    V, F = np.asarray(m.vertices, float), np.asarray(m.faces, np.int64)
+    rng = np.random.default_rng(3)
+    N = face_normals(V, F) + 0.45 * rng.normal(size=(len(F), 3))
+    N /= np.linalg.norm(N, axis=1, keepdims=True)
+    topo, sup = _probe_support(V, F, N)
+    assert sup.mean() > 0.05  # the noise does make supported chains
+    assert crease_like_share(topo, N, sup) == 0.0
+    assert cad_support(topo, N, sup, radius_in_edges(V, F)) == sup.mean()
+
+
+@pytest.mark.shared  # heavy (two denoise runs of 25k / 41k vertices), no shared data read
+def test_fine_noisy_box_is_a_cad_part_and_fine_noisy_sphere_is_not():
+    """End to end (round 11r): a box subdivided to q ≈ 36 at γ 0.3 reads a raw crease support
+    below 20 % but is a CAD part (outside weight 6); a sphere of 41k vertices at γ 0.5 is not."""
+    from meshrepair import add_noise, denoise
+
+    V, F = _box(6)
+    r = denoise(add_noise(V, F, 0.3, seed=0), F)
+    assert r.params["outside_weight"] > 1.0
+    m = trimesh.creation.icosphere(subdivisions=6)
+    V, F = np.asarray(m.vertices, float), np.asarray(m.faces, np.int64)
+    r = denoise(add_noise(V, F, 0.5, seed=0), F)
+    assert r.params["outside_weight"] == 1.0
+    assert r.params.get("presmooth_support_fraction", r.params["support_fraction"]) < 0.2

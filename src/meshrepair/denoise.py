@@ -319,7 +319,8 @@ def _denoise(V, F, *, lam, th, a, robust_iters, feature_iters, mask_update_every
         n1 = int(min(stages[0].max_iter, PROBE_MAX_ITERS))
         st1 = replace(stages[0], max_iter=n1, min_iter=min(stages[0].min_iter, n1))
         # the probe is one stage: its switch rule (in edge units, round 11r) is the stop rule
-        kw1 = {**opts_kw, "tol": _sf.probe_tol(st1, V, F) if PROBE_EARLY_STOP else tol}
+        q_edges = _sf.radius_in_edges(V, F, topo.edges)  # the mesh's radius in edge lengths
+        kw1 = {**opts_kw, "tol": _sf.probe_tol(st1, q_edges) if PROBE_EARLY_STOP else tol}
         Vn_w = V[pv] if reorder else V
         r1 = ADMMSolver(Fw, len(V), options=SolverOptions(stages=(st1,), **kw1),
                         topo=topo_w).solve(Vd, Vi)
@@ -347,7 +348,7 @@ def _denoise(V, F, *, lam, th, a, robust_iters, feature_iters, mask_update_every
             anchor = np.zeros(len(V))
             anchor[topo_w.edges[sup].ravel()] = 1.0
         info["tangential_ratio"] = tr
-        sf = _sf.cad_support(topo_w, r1.N, sup, V, F, th=th)  # round 11r: scale-free CAD test
+        sf = _sf.cad_support(topo_w, r1.N, sup, q_edges, th=th)  # round 11r: scale-free CAD
         if n_unf and Vd is Vw and not unfolded_data_after_probe(impulsive, tr, sf):
             Vd, Vi = Vn_w, Vw  # noise with a tangential part: the input is the main run's data
         if lam is None and ww > 1.0:  # correlated noise: λ from its level at its own scale

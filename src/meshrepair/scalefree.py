@@ -61,30 +61,35 @@ SCALE_FREE_CAD = True
 Q_CAD = 15.0
 
 
-def radius_in_edges(V: np.ndarray, F: np.ndarray) -> float:
-    """``q = rms_i |V_i − c| / l̄``, ``c`` the centroid of the referenced vertices."""
-    from .geometry import mean_edge_length
+def radius_in_edges(V: np.ndarray, F: np.ndarray, edges: np.ndarray | None = None) -> float:
+    """``q = rms_i |V_i − c| / l̄``, ``c`` the centroid of the referenced vertices and ``l̄``
+    the mean length of the unique edges (``edges``, (nE, 2), when known: the faces' unique
+    edges otherwise, which costs a sort)."""
+    from .geometry import edge_lengths, mean_edge_length
 
     V = np.asarray(V, dtype=np.float64)
     used = np.zeros(len(V), bool)
     used[np.asarray(F).ravel()] = True
     X = V[used] - V[used].mean(axis=0)
-    el = mean_edge_length(V, F)
+    el = mean_edge_length(V, F) if edges is None else float(edge_lengths(V, edges).mean())
     return float(np.sqrt(np.mean(np.einsum("ij,ij->i", X, X))) / max(el, 1e-300))
 
 
-def tolerance_factor(V: np.ndarray, F: np.ndarray, q_ref: float = Q_REF) -> float:
-    """``min(1, Q_0 / q)`` of the module docstring (1 when switched off)."""
+def tolerance_factor(V: np.ndarray, F: np.ndarray, q_ref: float = Q_REF, *,
+                     q: float | None = None) -> float:
+    """``min(1, Q_0 / q)`` of the module docstring (1 when switched off); ``q`` from
+    :func:`radius_in_edges` when not given."""
     if not SCALE_FREE_STOP:
         return 1.0
-    q = radius_in_edges(V, F)
+    q = radius_in_edges(V, F) if q is None else float(q)
     return float(min(1.0, q_ref / q)) if q > 0 else 1.0
 
 
-def probe_tol(stage, V: np.ndarray, F: np.ndarray) -> float:
-    """The probe's stopping tolerance: ``stage.switch_tol · min(1, Q_0 / q)``."""
-    return float(stage.switch_tol) * tolerance_factor(V, F)
-
+def probe_tol(stage, q: float) -> float:
+    """The probe's stopping tolerance ``stage.switch_tol · min(1, Q_0 / q)``, ``q`` the
+    mesh's :func:`radius_in_edges`."""
+    f = min(1.0, Q_REF / float(q)) if SCALE_FREE_STOP and q > 0 else 1.0
+    return float(stage.switch_tol) * f
 
 def crease_like_share(topo, N: np.ndarray, support: np.ndarray, *, th: float = 30.0) -> float:
     """``f_g`` of the module docstring: ``|C| / n_E`` times the share of C's chain edges in
@@ -120,16 +125,14 @@ def crease_like_share(topo, N: np.ndarray, support: np.ndarray, *, th: float = 3
     return float(support.mean()) * float(good[g].mean())
 
 
-def cad_support(topo, N: np.ndarray, support: np.ndarray, V: np.ndarray, F: np.ndarray, *,
+def cad_support(topo, N: np.ndarray, support: np.ndarray, q: float, *,
                 th: float = 30.0) -> float:
-    """``f_ref = max(f, f_g q / Q_c)`` of the module docstring (``f`` when switched off, or
-    when ``f`` already reaches :data:`meshrepair.denoise_rules.CAD_SUPPORT`)."""
+    """``f_ref = max(f, f_g q / Q_c)`` of the module docstring, ``q`` the mesh's
+    :func:`radius_in_edges` (``f`` when switched off, or when ``f`` already reaches
+    :data:`meshrepair.denoise_rules.CAD_SUPPORT`)."""
     from .denoise_rules import CAD_SUPPORT
 
     f = float(support.mean())
-    if not SCALE_FREE_CAD or f >= CAD_SUPPORT:
+    if not SCALE_FREE_CAD or f >= CAD_SUPPORT or not q > Q_CAD:
         return f
-    q = radius_in_edges(V, F)
-    if not q > Q_CAD:
-        return f
-    return max(f, crease_like_share(topo, N, support, th=th) * q / Q_CAD)
+    return max(f, crease_like_share(topo, N, support, th=th) * float(q) / Q_CAD)
