@@ -47,7 +47,6 @@ from itertools import product
 from pathlib import Path
 
 import numpy as np
-import scipy.sparse as sp
 from scipy.sparse.csgraph import dijkstra
 from scipy.spatial import cKDTree
 
@@ -57,7 +56,8 @@ from meshrepair.geometry import mean_edge_length
 from meshrepair.io import read_mesh
 from meshrepair.metrics import distances, msae, vertex_error
 from meshrepair.noise import add_noise
-from meshrepair.topology import boundary_loops, edge_topology
+from meshrepair.synthetic import edge_graph
+from meshrepair.topology import boundary_loops
 
 ROOT = Path(__file__).resolve().parents[1]
 DEFAULT_MESHES = Path(os.environ.get("MESHREPAIR_MESHES", ROOT.parent / "shared" / "meshes"))
@@ -386,14 +386,6 @@ def run_case(case: Case, methods: list[Method]) -> list[MethodResult]:
 # --------------------------------------------------------------------------------------------
 
 
-def _edge_graph(V, F):
-    e = edge_topology(F, len(V)).edges
-    w = np.linalg.norm(V[e[:, 0]] - V[e[:, 1]], axis=1)
-    n = len(V)
-    return sp.coo_matrix((np.r_[w, w], (np.r_[e[:, 0], e[:, 1]], np.r_[e[:, 1], e[:, 0]])),
-                         shape=(n, n)).tocsr()
-
-
 def _pinched_or_bad(F, nV) -> np.ndarray:
     """Vertices with more than two boundary edges (several boundary loops through them)."""
     he = np.stack([F, np.roll(F, -1, axis=1)], axis=2).reshape(-1, 2)
@@ -426,7 +418,7 @@ def cut_discs(name: str, V, F, *, n_discs=HOLE_COUNT, radius=HOLE_RADIUS, seed=H
     """Remove ``n_discs`` geodesic discs (edge-graph Dijkstra) of ``radius`` mean edge lengths."""
     l = mean_edge_length(V, F)
     r = radius * l
-    G = _edge_graph(V, F)
+    G = edge_graph(V, F)
     rng = np.random.default_rng(seed)
     seeds: list[int] = []
     for c in rng.permutation(len(V)):

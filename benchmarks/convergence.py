@@ -64,7 +64,7 @@ def capture_subproblem(V, F, k: int) -> dict:
     """Run the default denoise until the V-subproblem of ADMM iteration ``k``; return it."""
     import dataclasses
 
-    import meshrepair.solver as S
+    import meshrepair.solver.admm as S
     from meshrepair import denoise
 
     orig = S.run_inner

@@ -51,13 +51,12 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 import _common  # noqa: E402  (limits BLAS threads before numpy is imported)
 import numpy as np  # noqa: E402
-import scipy.sparse as sp  # noqa: E402
-from scipy.sparse.csgraph import dijkstra  # noqa: E402
 from scipy.spatial import cKDTree  # noqa: E402
 
 from meshrepair.fill import fill_holes  # noqa: E402
 from meshrepair.geometry import dihedral_angles, face_normals, mean_edge_length  # noqa: E402
 from meshrepair.metrics import distances  # noqa: E402
+from meshrepair.synthetic import edge_graph_distances  # noqa: E402
 from meshrepair.topology import edge_topology  # noqa: E402
 
 VARIANTS = {
@@ -69,19 +68,10 @@ VARIANTS = {
 
 
 def cut_disc(V, F, center, radius_edges):
-    topo = edge_topology(F, len(V))
-    e = topo.edges
-    w = np.linalg.norm(V[e[:, 0]] - V[e[:, 1]], axis=1)
-    G = sp.coo_matrix((np.r_[w, w], (np.r_[e[:, 0], e[:, 1]], np.r_[e[:, 1], e[:, 0]])),
-                      shape=(len(V), len(V))).tocsr()
-    inside = dijkstra(G, indices=center) < radius_edges * mean_edge_length(V, F)
+    inside = edge_graph_distances(V, F, center) < radius_edges * mean_edge_length(V, F)
     removed = inside[F].any(axis=1)
-    Fk = F[~removed]
-    used = np.zeros(len(V), bool)
-    used[Fk.ravel()] = True
-    idx = -np.ones(len(V), np.int64)
-    idx[used] = np.arange(used.sum())
-    return V[used], idx[Fk], F[removed]
+    Vc, Fc = compact(V, F[~removed])
+    return Vc, Fc, F[removed]
 
 
 def compact(V, F):
@@ -180,19 +170,11 @@ def run_denoise(lines):
     V, F, _ = _common.read("spot")
     diag = float(np.linalg.norm(V.max(axis=0) - V.min(axis=0)))
     Vn = add_noise(V, F, 0.2, seed=1)
-    topo = edge_topology(F, len(V))
-    e = topo.edges
-    w = np.linalg.norm(V[e[:, 0]] - V[e[:, 1]], axis=1)
-    G = sp.coo_matrix((np.r_[w, w], (np.r_[e[:, 0], e[:, 1]], np.r_[e[:, 1], e[:, 0]])),
-                      shape=(len(V), len(V))).tocsr()
     c = int(np.argmin(np.linalg.norm(V - np.array([0.47, 0.0, 0.2]), axis=1)))
-    inside = dijkstra(G, indices=c) < 4 * mean_edge_length(V, F)
+    inside = edge_graph_distances(V, F, c) < 4 * mean_edge_length(V, F)
     removed = inside[F].any(axis=1)
-    used = np.zeros(len(V), bool)
-    used[F[~removed].ravel()] = True
-    idx = -np.ones(len(V), np.int64)
-    idx[used] = np.arange(used.sum())
-    Vc, Fc = Vn[used], idx[F[~removed]]
+    Vc, Fc = compact(Vn, F[~removed])  # the noisy positions, cut where the clean mesh is
+    used = np.unique(F[~removed])  # the kept vertices, in the order compact keeps them
     out = ["", "Fill + denoise (spot.ply, normal noise γ = 0.2, disc r = 4 cut from the noisy "
            "mesh): surround = mean distance of the kept vertices to their clean positions / "
            "diagonal; dihedral = mean over the patch border edges vs the surround within 3 rings",

@@ -155,7 +155,8 @@ def test_polish_data_term_on_the_reordered_path(monkeypatch):
     V, F = np.asarray(box.vertices, float), np.asarray(box.faces, np.int64)
     Vn = add_noise(V, F, 0.6, seed=3)
     r = denoise(Vn, F)
-    monkeypatch.setattr(denoise_mod, "REORDER_MIN_VERTICES", 0)
+    monkeypatch.setattr(importlib.import_module("meshrepair.denoise_run"), "REORDER_MIN_VERTICES",
+                        0)
     r2 = denoise(Vn, F)
     assert r2.params["reordered"] and r2.params["polished"] > 0
     assert abs(msae(r2.V, V, F) / msae(r.V, V, F) - 1) < 0.005

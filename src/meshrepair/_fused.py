@@ -23,8 +23,9 @@ regulariser of (6) (the history energy) in one edge pass.
 Each kernel has a numpy twin (``tests/test_kernels.py`` checks they agree). The compiled face
 passes of :func:`venergy_grad_hdiag`, :func:`venergy_trial` and :func:`normals_update_rho2`
 share their loop bodies (inlined helpers) with ``_kernels.venergy_grad``, ``_kernels.venergy``
-and ``_kernels.face_normals`` and are compiled beside them in :mod:`meshrepair._kernels.faces`;
-likewise :func:`lengths_reg_energy` with ``_kernels.reg_energy`` in :mod:`meshrepair._kernels.admm`.
+and ``_kernels.face_normals`` and are compiled beside them in :mod:`meshrepair._kernels.venergy`
+and :mod:`meshrepair._kernels.faces`; likewise :func:`lengths_reg_energy` with
+``_kernels.reg_energy`` in :mod:`meshrepair._kernels.admm`.
 """
 
 from __future__ import annotations
@@ -36,16 +37,12 @@ from ._kernels import FASTMATH, HAVE_NUMBA, _np_venergy, _np_venergy_grad, _np_v
 
 if HAVE_NUMBA:
     # the face passes and the lengths + regulariser pass share their loop bodies with
-    # _kernels.faces / _kernels.admm (inlined helpers there), so they are compiled there; the
-    # two passes below share none
+    # _kernels.venergy / _kernels.faces / _kernels.admm (inlined helpers there), so they are
+    # compiled there; the two passes below share none
     from ._kernels import njit
     from ._kernels.admm import _nb_lengths_reg_energy
-    from ._kernels.faces import (
-        _nb_normals_update_rho2,
-        _nb_venergy_grad_hdiag,
-        _nb_venergy_grad_trial,
-        _nb_venergy_trial,
-    )
+    from ._kernels.faces import _nb_normals_update_rho2
+    from ._kernels.venergy import _nb_venergy_grad_hdiag, _nb_venergy_grad_trial, _nb_venergy_trial
 
     @njit(cache=True, fastmath=FASTMATH)
     def _nb_descent_direction(g, h, h_min, d):  # pragma: no cover - compiled

@@ -1,4 +1,5 @@
-"""Per-element geometry of a triangle mesh: normals, areas, edge lengths, dihedral angles.
+"""Per-element geometry of a triangle mesh: normals (3), areas, edge lengths, dihedral angles and
+the sharp-edge mask M_E of (5).
 
 All functions are pure, vectorised and take float64 vertices ``V`` of shape ``(nV, 3)``.
 """

@@ -1,6 +1,6 @@
 """Locality (Morton, Z-curve) ordering of a mesh and the edge re-indexing back.
 
-Big meshes are solved on a reordered copy (``meshrepair.denoise.REORDER_MIN_VERTICES``): every
+Big meshes are solved on a reordered copy (``meshrepair.denoise_run.REORDER_MIN_VERTICES``): every
 kernel is memory-bound there, and vertices and faces that are close in space are then close in
 memory. The result is mapped back to the input order exactly.
 """

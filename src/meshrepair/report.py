@@ -12,11 +12,7 @@ tables. All text is HTML-escaped.
 
 from __future__ import annotations
 
-import base64
-import html
-import io
 import logging
-import math
 import os
 from collections.abc import Mapping, Sequence
 from datetime import datetime, timezone
@@ -24,86 +20,26 @@ from pathlib import Path
 
 import numpy as np
 
-from .convergence_plot import _is_number, convergence_plot
+from .convergence_plot import convergence_plot
 from .errors import MeshRepairError
+from .report_html import (
+    _CSS,
+    _esc,
+    _history_summary,
+    _img,
+    _png_bytes,
+    _table,
+    hole_table,
+)
 from .topology import edge_topology
 
 __all__ = ["convergence_plot", "write_report"]
 
 log = logging.getLogger(__name__)
 
-_CSS = """
-body { font-family: -apple-system, 'Segoe UI', Helvetica, Arial, sans-serif; margin: 2em auto;
-       max-width: 1200px; color: #222; padding: 0 1em; }
-h1 { font-size: 1.6em; border-bottom: 2px solid #ccc; padding-bottom: .3em; }
-h2 { font-size: 1.25em; margin-top: 1.8em; }
-table { border-collapse: collapse; margin: .5em 0 1em 0; font-size: .95em; }
-th, td { border: 1px solid #ccc; padding: .3em .8em; text-align: left; vertical-align: top; }
-th { background: #f2f2f2; }
-td.num { text-align: right; font-family: Menlo, Consolas, monospace; }
-figure { display: inline-block; margin: .5em 1em .5em 0; vertical-align: top; }
-figure img { max-width: 100%; border: 1px solid #ddd; }
-figcaption { font-size: .9em; color: #555; margin-top: .3em; }
-p.note { color: #666; font-style: italic; }
-""".strip()
-
-_HISTORY_KEYS = ("iter", "energy", "rel_change", "res_t", "res_N", "time", "stage")
-
 
 # --------------------------------------------------------------------------------------------
 # helpers
-
-
-def _esc(x: object) -> str:
-    return html.escape(str(x), quote=True)
-
-
-def _fmt(v: object) -> str:
-    """Readable text for a table cell (numbers with 6 significant digits)."""
-    if isinstance(v, np.generic):
-        v = v.item()
-    if isinstance(v, bool) or v is None:
-        return str(v)
-    if isinstance(v, int):
-        return str(v)
-    if isinstance(v, float):
-        return f"{v:.6g}"
-    if isinstance(v, np.ndarray):
-        if v.size <= 8:
-            return np.array2string(v, precision=6, separator=", ")
-        return f"array of shape {v.shape}, dtype {v.dtype}"
-    if isinstance(v, Mapping):
-        return ", ".join(f"{k}={_fmt(x)}" for k, x in v.items())
-    if isinstance(v, (list, tuple)):
-        inner = ", ".join(_fmt(x) for x in v)
-        return f"[{inner}]" if isinstance(v, list) else f"({inner})"
-    return str(v)
-
-
-def _png_bytes(image: np.ndarray) -> bytes:
-    from matplotlib.image import imsave
-
-    buf = io.BytesIO()
-    imsave(buf, np.asarray(image), format="png")
-    return buf.getvalue()
-
-
-def _data_uri(png: bytes) -> str:
-    return "data:image/png;base64," + base64.b64encode(png).decode("ascii")
-
-
-def _img(png: bytes, alt: str, caption: str | None = None) -> str:
-    cap = f"<figcaption>{_esc(caption)}</figcaption>" if caption else ""
-    return f'<figure><img src="{_data_uri(png)}" alt="{_esc(alt)}">{cap}</figure>'
-
-
-def _table(rows: Sequence[tuple[object, object]], header: tuple[str, str]) -> str:
-    out = ["<table>", f"<tr><th>{_esc(header[0])}</th><th>{_esc(header[1])}</th></tr>"]
-    for k, v in rows:
-        cls = ' class="num"' if _is_number(v) else ""
-        out.append(f"<tr><td>{_esc(k)}</td><td{cls}>{_esc(_fmt(v))}</td></tr>")
-    out.append("</table>")
-    return "\n".join(out)
 
 
 def _check_pair(mesh: object, name: str) -> tuple[np.ndarray, np.ndarray]:
@@ -386,51 +322,3 @@ def _viewer_part(inp, out, highlight, highlight_label, regions, region_details, 
                              face_budget=face_budget or DEFAULT_FACE_BUDGET)
     return ("<h2>3-D view</h2>\n<p class=\"note\">Input and output with linked cameras; "
             "the pictures below are fixed views of the same meshes.</p>\n" + section)
-
-
-def hole_table(holes: Sequence[Mapping]) -> str:
-    """HTML table of per-hole records: what happened to each hole and why."""
-    if not holes:
-        return '<p class="note">The mesh had no holes.</p>'
-    cols = [("index", "hole"), ("n_boundary", "boundary edges"), ("length", "length"),
-            ("status", "status"), ("reason", "how / why"), ("n_new_vertices", "new vertices"),
-            ("n_new_faces", "new faces"), ("n_intersections", "intersections")]
-    out = ["<table>", "<tr>" + "".join(f"<th>{_esc(h)}</th>" for _, h in cols) + "</tr>"]
-    for rec in holes:
-        rec = dict(rec) if isinstance(rec, Mapping) else dict(rec.as_dict())
-        cells = []
-        for key, _ in cols:
-            v = rec.get(key, "")
-            if key == "n_intersections" and _is_number(v) and v < 0:
-                v = "not checked"
-            cls = ' class="num"' if _is_number(v) else ""
-            cells.append(f"<td{cls}>{_esc(_fmt(v))}</td>")
-        out.append("<tr>" + "".join(cells) + "</tr>")
-    out.append("</table>")
-    counts: dict[str, int] = {}
-    for rec in holes:
-        st = str((rec if isinstance(rec, Mapping) else rec.as_dict()).get("status", "?"))
-        counts[st] = counts.get(st, 0) + 1
-    summary = ", ".join(f"{n} {st}" for st, n in counts.items())
-    return f"<p>{len(holes)} holes: {_esc(summary)}.</p>\n" + "\n".join(out)
-
-
-def _history_summary(history: Sequence[Mapping]) -> str:
-    """Table with the first and last recorded values of each history key."""
-    rows = []
-    for key in _HISTORY_KEYS:
-        vals = [h.get(key) for h in history if isinstance(h, Mapping) and h.get(key) is not None]
-        if not vals:
-            continue
-        if key == "stage":
-            seen: list = []
-            for v in vals:
-                if not seen or seen[-1] != v:
-                    seen.append(v)
-            rows.append(("stages", " → ".join(str(s) for s in seen)))
-            continue
-        first, last = vals[0], vals[-1]
-        if _is_number(last) and not math.isfinite(float(last)):
-            last = str(last)
-        rows.append((f"{key} (first → last)", f"{_fmt(first)} → {_fmt(last)}"))
-    return _table(rows, ("history", "value")) if rows else ""

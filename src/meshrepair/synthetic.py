@@ -18,6 +18,19 @@ DAMAGES = ("dent", "spike", "noise", "flat")
 """The kinds of :func:`damage_region`."""
 
 
+def edge_graph(V: np.ndarray, F: np.ndarray):
+    """The mesh's edge graph weighted by edge length: a symmetric ``(nV, nV)`` scipy CSR matrix
+    (for ``scipy.sparse.csgraph``)."""
+    import scipy.sparse as sp
+
+    from .topology import edge_topology
+
+    e = edge_topology(F, len(V)).edges
+    w = np.linalg.norm(V[e[:, 0]] - V[e[:, 1]], axis=1)
+    return sp.coo_matrix((np.r_[w, w], (np.r_[e[:, 0], e[:, 1]], np.r_[e[:, 1], e[:, 0]])),
+                         shape=(len(V), len(V))).tocsr()
+
+
 def edge_graph_distances(V: np.ndarray, F: np.ndarray, sources, *,
                          limit: float = np.inf) -> np.ndarray:
     """Edge-graph distances from ``sources`` (a vertex index or a list of them).
@@ -34,16 +47,9 @@ def edge_graph_distances(V: np.ndarray, F: np.ndarray, sources, *,
     -------
     (nV,) float64 for one source, (len(sources), nV) for a list.
     """
-    import scipy.sparse as sp
     from scipy.sparse.csgraph import dijkstra
 
-    from .topology import edge_topology
-
-    e = edge_topology(F, len(V)).edges
-    w = np.linalg.norm(V[e[:, 0]] - V[e[:, 1]], axis=1)
-    G = sp.coo_matrix((np.r_[w, w], (np.r_[e[:, 0], e[:, 1]], np.r_[e[:, 1], e[:, 0]])),
-                      shape=(len(V), len(V))).tocsr()
-    return dijkstra(G, indices=sources, limit=limit)
+    return dijkstra(edge_graph(V, F), indices=sources, limit=limit)
 
 
 def geodesic_disc(V: np.ndarray, F: np.ndarray, center: int, radius: float, *,

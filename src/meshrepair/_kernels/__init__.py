@@ -9,8 +9,8 @@ docs/performance.md).
 
 from __future__ import annotations
 
-# split by concept: _jit (numba detection, njit, FASTMATH), faces (per-face geometry, the
-# V-subproblem), edges (per-edge gathers), admm (PCG, t update, multipliers, regulariser),
+# split by concept: _jit (numba detection, njit, FASTMATH), faces (per-face geometry), venergy
+# (the V-subproblem), edges (per-edge gathers), admm (PCG, t update, multipliers, regulariser),
 # connectivity (setup kernels); every name is re-exported here. tstep (the t-update from N in
 # one pass), fidelity (the tangential anchor) and priors (the flat-TV / per-edge-weight t-update)
 # are imported from their modules.
@@ -56,15 +56,17 @@ from .edges import (  # noqa: F401
 from .faces import (  # noqa: F401
     _np_face_area2_lmax2,
     _np_face_normals,
-    _np_venergy,
-    _np_venergy_grad,
     _np_vertex_normals,
-    _np_vhess_diag,
     face_area2_lmax2,
     face_normals,
+    vertex_normals,
+)
+from .venergy import (  # noqa: F401
+    _np_venergy,
+    _np_venergy_grad,
+    _np_vhess_diag,
     venergy,
     venergy_grad,
-    vertex_normals,
     vhess_diag,
 )
 
@@ -98,9 +100,7 @@ if HAVE_NUMBA:
     from .faces import (  # noqa: F401
         _nb_face_area2_lmax2,
         _nb_face_normals,
-        _nb_venergy,
-        _nb_venergy_grad,
         _nb_vertex_normals,
-        _nb_vhess_diag,
         _tri,
     )
+    from .venergy import _nb_venergy, _nb_venergy_grad, _nb_vhess_diag  # noqa: F401

@@ -1,6 +1,6 @@
 """Kernels of :mod:`meshrepair.polish`: one bilateral normal-filter pass over a CSR face
-neighbourhood, and the Sun et al. vertex steps towards given face normals. Numpy twins are the
-reference (tests/test_polish.py checks them equal)."""
+neighbourhood, and the Sun et al. vertex steps towards given face normals ((26) with λ = 0).
+Numpy twins are the reference (tests/test_polish.py checks them equal)."""
 
 from __future__ import annotations
 

@@ -1,5 +1,5 @@
-"""Per-edge kernels: edge lengths, the edge difference operator ``l_e (N_a - N_b)`` and its
-transpose, neighbour sums, the umbrella operator."""
+"""Per-edge kernels: edge lengths, the edge difference operator ``l_e (N_a - N_b)`` (D = L D̄
+of (4)) and its transpose, neighbour sums, the umbrella operator."""
 
 from __future__ import annotations
 

@@ -1,7 +1,8 @@
 """The repair solve shared by :func:`meshrepair.fill.fill_holes` and
 :func:`meshrepair.fill.inpaint` (step 4 of :mod:`meshrepair.fill`): the patches placed by
-:mod:`meshrepair.fill.place`, then the ADMM solve (fill only: the patches and ``rings`` rings of
-fixed faces; fill + denoise: the whole mesh) and the final intersection count."""
+:mod:`meshrepair.fill.place`, then the ADMM solve (17)-(21) of energy (6) (fill only: the
+patches and ``rings`` rings of fixed faces; fill + denoise: the whole mesh) and the final
+intersection count."""
 
 from __future__ import annotations
 

@@ -3,8 +3,8 @@
 Subpackage layout (one concept per module): :mod:`.detect` (loops, selection), :mod:`._geom2d`
 (2-D helpers, :class:`Patch`), :mod:`.planar` (planar enclosing of one loop), :mod:`.liepa`
 (minimum-weight triangulation), :mod:`.liepa_refine` (its refinement on its own surface),
-:mod:`.enclose` (several holes of a mesh), :mod:`.fairing`, :mod:`.triharmonic` (curvature-
-continuous fairing), :mod:`.intersect`.
+:mod:`.enclose` (several holes of a mesh; :mod:`.islands`: annuli, :mod:`.refuse`: refused
+patches), :mod:`.fairing`, :mod:`.triharmonic` (curvature-continuous fairing), :mod:`.intersect`.
 
 A *hole* is a simple closed boundary loop. :func:`find_holes` takes the loops of
 :func:`meshrepair.topology.boundary_loops` (which follow the face orientation) and splits a loop

@@ -1,4 +1,5 @@
-"""Enclosing several holes of one mesh: chords, islands (annuli), refusals."""
+"""Enclosing several holes of one mesh: chords, islands (annuli, :mod:`.islands`), refusals
+(:mod:`.refuse`)."""
 
 from __future__ import annotations
 
@@ -8,10 +9,11 @@ from collections.abc import Callable, Mapping, Sequence
 import numpy as np
 
 from ..errors import MeshRepairError
-from ._geom2d import Patch, _plane_frame, _polygon_is_simple, _vector_area
+from ._geom2d import Patch
 from .detect import Hole, HoleReport
-from .intersect import self_intersections
+from .islands import pair_islands
 from .planar import ENCLOSE_METHODS, _enclose_annulus, enclose_loop
+from .refuse import _coincident_loop_vertices, _LocalFaces, _patch_problem
 
 log = logging.getLogger(__name__)
 
@@ -42,59 +44,6 @@ def _split_chords(patch: Patch, bad: set[tuple[int, int]]) -> Patch:
     return Patch(X=X, T=T, uv=uv, method=patch.method, n_loop=patch.n_loop,
                  sharp_edges=np.asarray(sharp, np.int64).reshape(-1, 2),
                  n_creases=patch.n_creases)
-
-
-def _loop_side_points(V: np.ndarray, F: np.ndarray, loop: np.ndarray) -> np.ndarray:
-    """Centroids of the faces bordering the loop edges, shape ``(k, 3)``."""
-    sel = np.isin(F, loop).sum(axis=1) >= 2
-    Fs = F[sel]
-    third = {}
-    for f in Fs.tolist():
-        for j in range(3):
-            third[(f[j], f[(j + 1) % 3])] = f[(j + 2) % 3]
-    nxt = np.roll(loop, -1)
-    w = np.array([third.get((u, v), -1) for u, v in zip(loop.tolist(), nxt.tolist(),
-                                                          strict=True)])
-    ok = w >= 0
-    return (V[loop[ok]] + V[nxt[ok]] + V[w[ok]]) / 3.0
-
-
-def _nested_in(V: np.ndarray, F: np.ndarray, outer: Hole, inner: Hole) -> bool:
-    """True when loop ``inner`` lies inside the hole bounded by ``outer`` (an island)."""
-    Po, Pi = V[outer.vertices], V[inner.vertices]
-    lo, hi = Po.min(axis=0), Po.max(axis=0)
-    pad = 0.5 * float((hi - lo).max())
-    if (Pi < lo - pad).any() or (Pi > hi + pad).any():
-        return False
-    va = _vector_area(Po)
-    if not np.linalg.norm(va) > 0:
-        return False
-    n = -va / np.linalg.norm(va)
-    c = Po.mean(axis=0)
-    rad = float(np.linalg.norm(Po - c, axis=1).max())
-    if np.abs((Pi - c) @ n).max() > 0.5 * rad:
-        return False
-    e1, e2 = _plane_frame(n)
-
-    def proj(X):
-        return np.c_[(X - c) @ e1, (X - c) @ e2]
-
-    Qo, Qi = proj(Po), proj(Pi)
-    if not _polygon_is_simple(Qo):
-        return False
-    from matplotlib.path import Path as MPath
-
-    poly = MPath(Qo)
-    if not poly.contains_points(Qi).all():
-        return False
-    # a hole has its surface outside the loop (a border of a surface piece has it inside)
-    side = _loop_side_points(V, F, outer.vertices)
-    if len(side) == 0 or poly.contains_points(proj(side)).mean() > 0.5:
-        return False
-    # an island boundary turns the other way round than the hole it sits in
-    area_i = 0.5 * float(np.sum(Qi[:, 0] * np.roll(Qi[:, 1], -1) - np.roll(Qi[:, 0], -1)
-                                * Qi[:, 1]))
-    return area_i > 0
 
 
 def _opposite_points(V: np.ndarray, F: np.ndarray, loop: np.ndarray) -> np.ndarray:
@@ -189,26 +138,7 @@ def enclose_holes(V: np.ndarray, F: np.ndarray, holes: Sequence[Hole],
     for h in holes:  # holes are sorted longest first
         longest_of_component.setdefault(h.component, h.index)
 
-    # islands: a loop nested inside another hole is filled together with it as an annulus
-    partner: dict[int, int] = {}
-    # candidate pairs from the loops' bounding boxes (the outer box padded by half its size, as
-    # in _nested_in), so many small holes do not cost a quadratic number of geometric tests
-    blo = np.array([V[h.vertices].min(axis=0) for h in holes]).reshape(-1, 3)
-    bhi = np.array([V[h.vertices].max(axis=0) for h in holes]).reshape(-1, 3)
-    bpad = 0.5 * (bhi - blo).max(axis=1, initial=0.0) if len(holes) else np.zeros(0)
-    order_lo = np.argsort(blo[:, 0]) if len(holes) else np.zeros(0, np.int64)
-    for io, ho in enumerate(holes):
-        lo_o, hi_o = blo[io] - bpad[io], bhi[io] + bpad[io]
-        a = np.searchsorted(blo[order_lo, 0], lo_o[0], side="left")
-        cand = order_lo[a:]
-        cand = cand[((blo[cand] >= lo_o) & (bhi[cand] <= hi_o)).all(axis=1)]
-        for ii in np.sort(cand).tolist():
-            hi = holes[ii]
-            if hi.index == ho.index or hi.index in partner or ho.index in partner:
-                continue
-            if hi.length < ho.length and _nested_in(V, F, ho, hi):
-                partner[ho.index] = hi.index
-                partner[hi.index] = ho.index
+    partner = pair_islands(V, F, holes)
     for h in holes:
         if h.index in partner:
             o = partner[h.index]
@@ -346,86 +276,3 @@ def _vertex_faces(F: np.ndarray, nV: int) -> tuple[np.ndarray, np.ndarray]:
     order = np.argsort(flat, kind="stable")
     ptr = np.r_[0, np.cumsum(np.bincount(flat, minlength=nV))]
     return ptr, order // 3
-
-
-def _coincident_loop_vertices(V: np.ndarray, loop: np.ndarray) -> tuple[int, int] | None:
-    """Two distinct loop vertices at the same position (a zero-width hole along a seam of
-    duplicated vertices), or None. O(k log k)."""
-    from scipy.spatial import cKDTree
-
-    P = V[loop]
-    scale = float(np.ptp(P, axis=0).max()) if len(P) else 0.0
-    if not scale > 0:
-        return (int(loop[0]), int(loop[1]))
-    pairs = cKDTree(P).query_pairs(1e-9 * scale, output_type="ndarray")
-    if len(pairs) == 0:
-        return None
-    i, j = pairs[0]
-    return int(loop[i]), int(loop[j])
-
-
-class _LocalFaces:
-    """Faces of a mesh near a box, from precomputed face bounding boxes (so checking one patch
-    costs O(nF) vectorised comparisons, not a k-d tree over the whole mesh)."""
-
-    def __init__(self, V: np.ndarray, F: np.ndarray):
-        self.V, self.F = V, F
-        T = V[F]
-        self.lo, self.hi = T.min(axis=1), T.max(axis=1)
-
-    def local(self, Vp, Fp, newV, newF, nV, pad):
-        """Local mesh of the faces overlapping the patch box: ``(Vl, Fl, Fpl, interior)`` with
-        the existing faces ``Fl``, the patch faces ``Fpl`` and the patch's interior vertices."""
-        Vall_new = np.concatenate([*newV, Vp]) if newV else Vp
-        Fall_prev = np.concatenate(newF) if newF else np.empty((0, 3), np.int64)
-
-        def pos(idx):
-            out = np.empty((len(idx), 3))
-            old = idx < nV
-            out[old] = self.V[idx[old]]
-            out[~old] = Vall_new[idx[~old] - nV]
-            return out
-
-        Pp = pos(Fp.ravel())
-        lo, hi = Pp.min(axis=0) - pad, Pp.max(axis=0) + pad
-        sel = np.flatnonzero(((self.lo <= hi) & (self.hi >= lo)).all(axis=1))
-        parts = [self.F[sel]]
-        if len(Fall_prev):
-            T = pos(Fall_prev.ravel()).reshape(-1, 3, 3)
-            ok = ((T.min(axis=1) <= hi) & (T.max(axis=1) >= lo)).all(axis=1)
-            parts.append(Fall_prev[ok])
-        Fl_g = np.concatenate(parts)
-        used = np.unique(np.r_[Fl_g.ravel(), Fp.ravel()])
-        loc = {int(g): i for i, g in enumerate(used.tolist())}
-        remap = np.vectorize(loc.__getitem__, otypes=[np.int64])
-        Vl = pos(used)
-        Fl = remap(Fl_g) if len(Fl_g) else np.empty((0, 3), np.int64)
-        Fpl = remap(Fp)
-        interior = np.flatnonzero(used >= nV + (len(Vall_new) - len(Vp)))
-        return Vl, Fl.reshape(-1, 3), Fpl, interior
-
-
-def _patch_problem(V: np.ndarray, F: np.ndarray, Fp: np.ndarray, interior: np.ndarray,
-                   h: float, intersections: bool, border: bool = True) -> str:
-    """Reason to refuse a patch (empty string if fine). ``border``: the loop is the longest of
-    its component (only such a loop is said to be a border)."""
-    from ..metrics import point_to_surface
-
-    # a few interior vertices near the surface say nothing (a crease corner of a small hole
-    # lies close to the surround): the test is for big patches doubling a sheet
-    if len(F) and len(interior) >= 8:
-        d = point_to_surface(V[interior], V, F)
-        if np.mean(d < 0.2 * h) > 0.5:
-            if border:
-                return ("the patch would lie on the existing surface (the loop is probably the "
-                        "outer border of an open surface: use keep_border or exclude it)")
-            return ("the patch would lie on the existing surface (another sheet of the mesh "
-                    "covers the hole); exclude it or fill it manually")
-    if not intersections:
-        return ""
-    Fall = np.r_[F, Fp]
-    pairs = self_intersections(V, Fall, np.arange(len(F), len(Fall)))
-    if len(pairs):
-        return (f"the patch would intersect the surface ({len(pairs)} face pairs): the loop is "
-                "too twisted for a direct fill; exclude it or fill it manually")
-    return ""

@@ -257,7 +257,7 @@ def viewer_page(
     ``metrics`` maps a metric name to one value per mesh (shown as a table, one column per
     mesh). Other parameters as :func:`viewer_section`.
     """
-    from ..report import _fmt
+    from ..report_html import _fmt
 
     parts = [viewer_section(meshes, regions, face_budget=face_budget, height=height,
                             region_details=region_details)]
