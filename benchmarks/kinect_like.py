@@ -7,10 +7,19 @@ level γ = 0.4 (seed 7), the regime where the multi-scale estimate finds the noi
 not exercise the rule. Prints one markdown row per mesh::
 
     python benchmarks/kinect_like.py
+
+``--decision`` compares round 9k's decision (``ρ_S > 1/2`` alone,
+``denoise_rules.SHARPEN_FLAT_SUPPORT = False``) with round 11k's (the flat support,
+:mod:`meshrepair.sharpen_decision`) instead of the step off / on, and prints the largest set's
+``ρ`` and ``φ``; ``--cases mesh:γ:m:seed ...`` replaces the default list (``kinect`` is the
+real Kinect pyramid of ``published/``)::
+
+    python benchmarks/kinect_like.py --decision --cases kinect fandisk:0.4:3:1 twelve:0.3:3:3
 """
 
 from __future__ import annotations
 
+import argparse
 import importlib
 import sys
 import time
@@ -22,33 +31,65 @@ import _common as C  # noqa: E402, I001  (sets the thread env vars before numpy 
 MESHES = ("fandisk", "bunny", "igea", "nicolo", "spot", "sharp_sphere", "twelve", "trim_star")
 
 
-def main() -> None:
-    from meshrepair import denoise, mean_angle_error, msae
+def _inputs(case: str):
+    from meshrepair import read_mesh
     from meshrepair.scale import correlated_noise
 
+    if case == "kinect":
+        Vt = read_mesh(C.mesh_path("published/tgv_kinect_pyramid__truth")).V
+        m = read_mesh(C.mesh_path("published/tgv_kinect_pyramid__noisy"))
+        return Vt, m.V, m.F
+    name, g, steps, seed = (case.split(":") + ["0.4", "3", "7"][len(case.split(":")) - 1:])[:4]
+    Vt, F, _ = C.read(name)
+    return Vt, correlated_noise(Vt, F, float(g), int(steps), seed=int(seed)), F
+
+
+def main(argv=None) -> None:
+    from meshrepair import denoise, mean_angle_error, msae
+
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--decision", action="store_true",
+                    help="round 9k's decision against round 11k's (instead of off / on)")
+    ap.add_argument("--cases", nargs="+", default=list(MESHES))
+    args = ap.parse_args(argv)
     rules = importlib.import_module("meshrepair.denoise_rules")
     C.limit_threads(1)
     info = C.machine_info()
     print(f"machine: {info}\n")
-    print("| mesh | w | ℓ | without sharpening MSAE / E_a | with (default) | change | kept | "
-          "time without / with |")
-    print("|---|---:|---:|---|---|---:|---:|---:|")
-    for name in MESHES:
-        Vt, F, _ = C.read(name)
-        Vn = correlated_noise(Vt, F, 0.4, 3, seed=7)
-        rules.SHARPEN = False
-        t0 = time.perf_counter()
-        r0 = denoise(Vn, F)
-        dt0 = time.perf_counter() - t0
-        rules.SHARPEN = True
-        t = time.perf_counter()
-        r1 = denoise(Vn, F)
-        dt = time.perf_counter() - t
+    if args.decision:
+        print("| case | w | round 9k decision MSAE / E_a (kept) | round 11k (kept) | change "
+              "| ρ | φ "
+              "| time 9k / 11k |")
+        print("|---|---:|---|---|---:|---:|---:|---:|")
+    else:
+        print("| mesh | w | ℓ | without sharpening MSAE / E_a | with (default) | change | kept | "
+              "time without / with |")
+        print("|---|---:|---:|---|---|---:|---:|---:|")
+    for case in args.cases:
+        Vt, Vn, F = _inputs(case)
+        runs = []
+        for on in (False, True):
+            if args.decision:
+                rules.SHARPEN_FLAT_SUPPORT = on
+            else:
+                rules.SHARPEN = on
+            t = time.perf_counter()
+            r = denoise(Vn, F)
+            runs.append((r, time.perf_counter() - t))
+        rules.SHARPEN, rules.SHARPEN_FLAT_SUPPORT = True, True
+        (r0, dt0), (r1, dt) = runs
         m0, m1 = msae(r0.V, Vt, F), msae(r1.V, Vt, F)
-        print(f"| {name} | {r1.params['willmore_weight']:.1f} | {r1.params['noise_length']:.2f} "
-              f"| {m0:.2f} / {mean_angle_error(r0.V, Vt, F):.2f}° | {m1:.2f} / "
-              f"{mean_angle_error(r1.V, Vt, F):.2f}° | {100 * (m1 / m0 - 1):+.1f} % | "
-              f"{r1.params['sharpened']:.3f} | {dt0:.1f} / {dt:.1f} s |", flush=True)
+        a0, a1 = mean_angle_error(r0.V, Vt, F), mean_angle_error(r1.V, Vt, F)
+        p = r1.params
+        if args.decision:
+            print(f"| {case} | {p['willmore_weight']:.1f} | {m0:.2f} / {a0:.2f}° "
+                  f"({r0.params['sharpened']:.2f}) | {m1:.2f} / {a1:.2f}° ({p['sharpened']:.2f}) "
+                  f"| {100 * (m1 / m0 - 1):+.1f} % | {p['sharpen_rho']:.3f} | "
+                  f"{p['sharpen_flat']:.2f} | {dt0:.1f} / {dt:.1f} s |", flush=True)
+        else:
+            print(f"| {case} | {p['willmore_weight']:.1f} | {p['noise_length']:.2f} "
+                  f"| {m0:.2f} / {a0:.2f}° | {m1:.2f} / {a1:.2f}° | {100 * (m1 / m0 - 1):+.1f} % "
+                  f"| {p['sharpened']:.3f} | {dt0:.1f} / {dt:.1f} s |", flush=True)
 
 
 if __name__ == "__main__":

@@ -221,6 +221,11 @@ def test_quality_published_kinect_sharpened_creases():
 
     r = denoise(Vn, F)
     assert r.params["sharpened"] > 0.2
+    # round 11k: the decision is clear of its thresholds (measured ρ 0.500, φ 0.58)
+    from meshrepair.modes import MODE_FLAT_SHARE, MODE_RHO_FLAT
+
+    assert r.params["sharpen_rho"] > MODE_RHO_FLAT + 0.2
+    assert r.params["sharpen_flat"] > MODE_FLAT_SHARE + 0.1
     assert msae(r.V, Vt, F) < 0.92 * msae(Vp, Vt, F)
     assert mean_angle_error(r.V, Vt, F) < mean_angle_error(Vp, Vt, F)
     assert vertex_error(r.V, Vt) < vertex_error(Vp, Vt)

@@ -57,10 +57,12 @@ igea 222.4 → 218.8, E_V ratio 1.13 → 1.11, every hold-out row within +0.4 %.
 
 def _reanchor_smooth(V_in, V_out, F, topo, sup_v, gamma, info):
     """:data:`REANCHOR` on the vertices outside ``sup_v``; records its decision in ``info``."""
+    from .organic_fidelity import reanchor_ratio_at_ungraded
     from .reproject import reanchor, residual_tangential_ratio
 
     ratio = residual_tangential_ratio(V_out, V_in, F)
-    info["reanchor_ratio"] = ratio
+    info["reanchor_ratio"] = ratio  # read at the ungraded data weight (round 11n)
+    ratio = reanchor_ratio_at_ungraded(ratio, info.get("lambda_gain", 1.0))
     if not (ratio < REANCHOR_MAX_RATIO) or gamma > HEAVY_NOISE:
         return V_out
     V_new, w = reanchor(V_out, V_in, F, ~sup_v, topo=topo)
@@ -149,6 +151,7 @@ def finish_result(V, V_out, F, topo, M_E, *, data, sup_v, gamma, gamma_rms, impu
     (nV, 3) float64, the finished vertices
     """
     info["polished"] = 0.0
+    info.setdefault("lambda_gain", 1.0)  # round 11n: the data weight's tangential gain
     # the rule reads the automatic decisions only (a user-set Willmore weight is not a finding)
     pr = polish_rule(max(gamma, gamma_rms), w_cad,
                      ww if automatic else 1.0, info["noise_length"])
@@ -186,12 +189,19 @@ def finish_result(V, V_out, F, topo, M_E, *, data, sup_v, gamma, gamma_rms, impu
         if pc:
             V_out, info["cad_finish_gated"] = cad_finish(V_out, F, M_E, topo, passes=pc)
             info["cad_finish_passes"] = pc
-    info["sharpened"] = 0.0
+    info.update(sharpened=0.0, sharpen_rho=float("nan"), sharpen_flat=float("nan"))
     sr = sharpen_rule(ww if automatic else 1.0, info["noise_length"])
     if polish and sr is not None:  # correlated noise: rounded creases, kept where data agree
+        from .denoise_rules import SHARPEN_FLAT_SUPPORT
         from .modes import sharpen
 
-        V_out, info["sharpened"] = sharpen(V_out, V, F, M_E, topo, rings=sr)
+        # round 11k: a flat-supported set passes at ρ > 0.2 (meshrepair.sharpen_decision)
+        flat = (pr[0], pr[1]) if SHARPEN_FLAT_SUPPORT and pr is not None else None
+        st: dict = {}
+        V_out, info["sharpened"] = sharpen(V_out, V, F, M_E, topo, rings=sr, flat=flat,
+                                           stats=st)
+        info.update(sharpen_rho=st.get("rho", float("nan")),
+                    sharpen_flat=st.get("flat", float("nan")))
         log.info("crease sharpening (%d rings) kept on %.1f %% of the vertices", sr,
                  100 * info["sharpened"])
     return V_out

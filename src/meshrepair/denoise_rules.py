@@ -285,6 +285,9 @@ def reintegrate_rule(passes: int, reanchored: bool, impulsive: bool, ratio_after
         return 0
     return int(max(2, round(REINTEGRATE_STEPS_PER_GAMMA * gamma)))
 SHARPEN = True
+SHARPEN_FLAT_SUPPORT = True
+"""Round 11k: the sharpening's decision trusts a flat-supported set at ``ρ_S > 0.2``
+(:mod:`meshrepair.sharpen_decision`); False: round 9k's ``ρ_S > 1/2`` alone."""
 SHARPEN_RINGS = 10
 SHARPEN_MAX_RINGS = 14
 """Cap of ``r``: the work grows as ``r²`` per face (igea, 134k vertices, ℓ = 1.73: 36 s at

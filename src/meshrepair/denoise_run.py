@@ -199,7 +199,7 @@ def _denoise(V, F, *, lam, th, a, robust_iters, feature_iters, mask_update_every
         from . import organic_fidelity as _of
 
         if lam is None and _of.applies(sf, ww, w_out, impulsive, ns.rho):
-            lam_used = _of.organic_lambda(gamma, tr)  # round 10l: the uncapped data weight
+            lam_used = _of.main_lambda(gamma, tr, info, graded=not presmoothed)  # 10l, 11n
             opts_kw["lam"] = lam_used
         info.update(support_fraction=sf, willmore_weight=ww,
                     noise_rho=ns.rho, noise_length=ns.length, noise_gamma_scale=ns.gamma)

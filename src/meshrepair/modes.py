@@ -58,6 +58,12 @@ keeps 77 % of its vertices (synthetic fandisk 68 %). The test reads
 ``ρ_S = ⟨X − V, V⁰ − V⟩_S / ‖X − V‖²_S > 1/2``; the Kinect's large set passes at
 ``ρ = 0.500``, a thin margin (docs/parameters.md): where it fails the result is the
 unsharpened one, never worse.
+
+**Flat support (round 11k).** Under correlated noise the test is biased against ``X`` (the
+result keeps low-frequency noise that the sharpened planes remove), so on a set whose
+vertices lie mostly on flat faces of the result (``φ_S ≥ 0.45``, the polish's flatness gate
+at half its threshold) ``ρ_S > 0.2`` suffices: :mod:`meshrepair.sharpen_decision` has the
+maths and the measured margins (the Kinect: ``ρ = 0.500``, ``φ = 0.58``).
 """
 
 from __future__ import annotations
@@ -65,7 +71,6 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
-from . import _kernels as _k
 from ._kernels.modes import mode_rows, rings_rows
 
 MODE_SIGMA_S = 0.15
@@ -79,6 +84,14 @@ MODE_ETA = 0.007
 :mod:`meshrepair.polish_fidelity`, on the merge with round 9b; module docstring)."""
 MODE_VSTEPS = 30
 """Vertex steps per pass of the candidate."""
+MODE_RHO_FLAT = 0.2
+"""``ρ_flat``: the data test's threshold on a flat-supported set (module docstring)."""
+MODE_FLAT_SHARE = 0.45
+"""``φ_min``: the share of a set's vertices on flat faces of the result that makes it
+flat-supported (:mod:`meshrepair.sharpen_decision`)."""
+MODE_FLAT_TAU = 0.5
+"""The flatness threshold of the flat support, a fraction of the polish's ``τ_p``
+(:func:`meshrepair.polish.flat_gate` at ``τ_p / 2``)."""
 MODE_CHUNK = 20_000
 """Rows of the neighbourhood built and shifted at a time (memory ≈ chunk × |K(f)| indices)."""
 
@@ -141,27 +154,36 @@ def basin_gate(M: np.ndarray, A: sp.csr_matrix, away: np.ndarray, cons: float) -
 
 
 def supported_by_data(V0: np.ndarray, V: np.ndarray, X: np.ndarray, edges: np.ndarray,
-                      eps: float) -> np.ndarray:
-    """``(nV,) bool``: the vertices of the data test of the module docstring (moved by more
-    than ``eps`` — an absolute length — in a connected set where ``X`` lowers the fidelity)."""
+                      eps: float, *, flat: np.ndarray | None = None,
+                      rho_flat: float = MODE_RHO_FLAT, share: float = MODE_FLAT_SHARE,
+                      stats: dict | None = None) -> np.ndarray:
+    """``(nV,) bool``: the vertices of the decision of the module docstring (moved by more
+    than ``eps`` — an absolute length — in a connected set ``S`` with ``ρ_S > 1/2``, or, when
+    ``flat`` (``(nV,) bool``, the vertices on a flat face of the result) is given, with
+    ``ρ_S > rho_flat`` and ``φ_S ≥ share``). ``stats`` (optional) receives ``rho``, ``flat``
+    and ``size`` of the largest set."""
+    from .sharpen_decision import set_statistics
+
     moved = np.linalg.norm(X - V, axis=1) > eps
     out = np.zeros(len(V), bool)
     if not moved.any():
         return out
-    e = edges[moved[edges[:, 0]] & moved[edges[:, 1]]]
-    lab = _k.union_find(len(V), np.ascontiguousarray(e[:, 0]), np.ascontiguousarray(e[:, 1]))
-    n = int(lab.max()) + 1
-    dV = np.sum((V0 - V) ** 2, axis=1)
-    dX = np.sum((V0 - X) ** 2, axis=1)
-    sV = np.bincount(lab[moved], dV[moved], minlength=n)
-    sX = np.bincount(lab[moved], dX[moved], minlength=n)
-    out[moved] = (sX < sV)[lab[moved]]
+    lab, rho, phi = set_statistics(V0, V, X, edges, moved, flat)
+    keep = rho > 0.5
+    if flat is not None:
+        keep |= (rho > rho_flat) & (phi >= share)
+    out[moved] = keep[lab[moved]]
+    if stats is not None:
+        big = int(np.argmax(np.bincount(lab[moved])))
+        stats.update(rho=float(rho[big]), flat=float(phi[big]),
+                     size=int(np.sum(lab[moved] == big)))
     return out
 
 
 def sharpen(V: np.ndarray, V0: np.ndarray, F: np.ndarray, sharp: np.ndarray, topo, *,
             rings: int, passes: int = MODE_PASSES, sigma_s: float = MODE_SIGMA_S,
-            cons: float = MODE_CONSISTENCY, eps: float = MODE_EPS, eta: float = MODE_ETA
+            cons: float = MODE_CONSISTENCY, eps: float = MODE_EPS, eta: float = MODE_ETA,
+            flat: tuple[int, float] | None = None, stats: dict | None = None
             ) -> tuple[np.ndarray, float]:
     """The step of the module docstring.
 
@@ -177,12 +199,41 @@ def sharpen(V: np.ndarray, V0: np.ndarray, F: np.ndarray, sharp: np.ndarray, top
     eps : the data test's motion threshold, mean edge lengths
     eta : float >= 0, the candidate's data weight per vertex step ``η_s`` (0: plain Sun steps,
         round 9k as first written)
+    flat : ``(r_p, τ_p)``, optional: the polish's ring count and flatness threshold (degrees);
+        the flat support is :func:`meshrepair.polish.flat_gate` on ``V`` at ``r_p`` rings and
+        ``MODE_FLAT_TAU τ_p`` (:mod:`meshrepair.sharpen_decision`, round 11k); None: the test
+        ``ρ_S > 1/2`` alone
+    stats : dict, optional, filled with the largest set's ``rho``, ``flat`` and ``size``
 
     Returns
     -------
     V : (nV, 3) float64, a new array
     kept : float, the fraction of the vertices the step moved
     """
+    F = np.asarray(F, dtype=np.int64)
+    V = np.asarray(V, dtype=np.float64)
+    V0 = np.asarray(V0, dtype=np.float64)
+    e = topo.edges
+    le = float(np.linalg.norm(V[e[:, 0]] - V[e[:, 1]], axis=1).mean())
+    X = candidate(V, V0, F, sharp, topo, rings=rings, passes=passes, sigma_s=sigma_s,
+                  cons=cons, eta=eta)
+    fv = None
+    if flat is not None:
+        from .sharpen_decision import flat_vertices
+
+        fv = flat_vertices(V, F, sharp, topo, rings=int(flat[0]),
+                           tau=MODE_FLAT_TAU * float(flat[1]))
+    keep = supported_by_data(V0, V, X, e, eps * le, flat=fv, stats=stats)
+    out = V.copy()
+    out[keep] = X[keep]
+    return out, float(keep.mean())
+
+
+def candidate(V: np.ndarray, V0: np.ndarray, F: np.ndarray, sharp: np.ndarray, topo, *,
+              rings: int, passes: int = MODE_PASSES, sigma_s: float = MODE_SIGMA_S,
+              cons: float = MODE_CONSISTENCY, eta: float = MODE_ETA) -> np.ndarray:
+    """The sharpened candidate ``X`` of the module docstring (modes, basins, ``passes``
+    forward-backward vertex passes), before the data test; parameters as :func:`sharpen`."""
     from .polish_fidelity import vertex_update_with_data
 
     F = np.asarray(F, dtype=np.int64)
@@ -206,7 +257,4 @@ def sharpen(V: np.ndarray, V0: np.ndarray, F: np.ndarray, sharp: np.ndarray, top
         take = basin_gate(M, A1, ~near, cons)
         X = vertex_update_with_data(X, F, np.where(take[:, None], M, N), V0, eta=eta,
                                     steps=MODE_VSTEPS)
-    keep = supported_by_data(V0, V, X, e, eps * le)
-    out = V.copy()
-    out[keep] = X[keep]
-    return out, float(keep.mean())
+    return X
