@@ -94,7 +94,13 @@ def test_rules():
 
 @pytest.mark.shared
 def test_spot_smooth_region_better_with_the_step(monkeypatch):
-    """spot γ0.3 normal (docs/comparison.md's row, seed 1): measured 138.3 -> 100.3."""
+    """spot γ0.3 normal (docs/comparison.md's row, seed 1): measured 138.3 -> 100.3. Round
+    11c's longer low-pass (:mod:`meshrepair.coarse`), which fires on this row after this step
+    and takes most of its effect (57.8 with this step, 60.3 without), is switched off: this test
+    measures round 9s."""
+    from meshrepair import coarse as _co
+
+    monkeypatch.setattr(_co, "COARSE", False)
     V, F = shared_mesh("spot.ply")
     Vn = add_noise(V, F, 0.3, direction="normal", seed=1)
     r = denoise(Vn, F)

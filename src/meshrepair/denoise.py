@@ -60,6 +60,11 @@ Taubin λ|μ pairs on the input, then the whole schedule above runs on the low-p
 (:mod:`meshrepair.presmooth`; ``params['presmooth_steps']``). The run on the low-passed mesh
 is not polished.
 
+Round 11d: a crease chain of the probe is dropped from C when both the whole network of chains
+and the chain itself branch (β > 0.2) and have rough sides (s > 5.5°): noise, not a CAD crease
+(:mod:`meshrepair.crease_network`); when that removed part of C, the noise is read as heavy for
+this mesh and the round-10h gate does not ask for γ_t > 0.32.
+
 Throughout: λ = ``clip(0.02 / γ̂², 0.05, 1)``; the Willmore weight ``w`` from ρ for correlated
 noise along the normals (:func:`willmore_weight_from_scale`) and then ``3 max(1, ℓ²)`` V-steps
 per iteration for its correlation length ℓ, the probe included (:func:`inner_iters_from_scale`);

@@ -11,6 +11,8 @@ round) and records its own, in this order:
 4. *organic finish*: one-ring guidance, then the re-integration from the input
    (:mod:`meshrepair.organic`, :func:`~meshrepair.denoise_rules.guidance_rule`,
    :func:`~meshrepair.denoise_rules.reintegrate_rule`);
+4b. *longer low-pass* where the result is smooth at the mesh's resolution (round 11c,
+   :mod:`meshrepair.coarse`);
 5. *CAD finish*: the one-ring guidance on CAD parts (:mod:`meshrepair.cadfinish`);
 6. *crease sharpening* for correlated noise (:func:`~meshrepair.denoise_rules.sharpen_rule`,
    :mod:`meshrepair.modes`).
@@ -131,7 +133,7 @@ def _organic_finish(V_in, V_out, F, topo, M_E, gamma, impulsive, ww, info):
 
 
 def finish_result(V, V_out, F, topo, M_E, *, data, sup_v, gamma, gamma_rms, impulsive, ww,
-                  w_cad, automatic, polish, info):
+                  w_cad, automatic, polish, info, probe=None):
     """Steps 1-6 of the module docstring on the solve's result ``V_out`` (input order).
 
     Parameters
@@ -145,6 +147,8 @@ def finish_result(V, V_out, F, topo, M_E, *, data, sup_v, gamma, gamma_rms, impu
     automatic : the Willmore weight was read from the input (not set by the user)
     polish : the user's ``polish`` switch
     info : dict, the decisions so far; updated in place with each step's
+    probe : (nV, 3) float64 or None, the robust probe's result (the reference of the unfolding
+        of the result, :func:`meshrepair.denoise_folds.unfold_result`)
 
     Returns
     -------
@@ -181,6 +185,22 @@ def finish_result(V, V_out, F, topo, M_E, *, data, sup_v, gamma, gamma_rms, impu
                 residual_level_ratio=float("nan"), reintegrate_rejected=0)
     if sup_v is not None and automatic:  # organic finish (round 9)
         V_out = _organic_finish(V, V_out, F, topo, M_E, gamma, impulsive, ww, info)
+    info.update(coarse_roughness=float("nan"), coarse_steps=0)
+    if sup_v is not None and automatic:  # round 11c: smooth at the mesh's resolution
+        from . import coarse as _co
+
+        gate = dict(support_fraction=info["support_fraction"], outside=info["outside_weight"],
+                    willmore=ww, impulsive=impulsive)
+        if _co.coarse_steps(gamma, 0.0, **gate):
+            c = _co.curvature_roughness(V_out, F, topo.edges)
+            info["coarse_roughness"] = c
+            kc = _co.coarse_steps(gamma, c, **gate)
+            if kc:
+                nrm = _co.normal_only(info["tangential_ratio"], gamma)
+                keep = bool(info["reintegrate_steps"]) and not impulsive  # its folds are kept
+                V_out = _co.coarse_lowpass(V_out, F, topo, kc, normal=nrm, unfold=not keep,
+                                           reference=probe)
+                info["coarse_steps"] = kc
     info.update(cad_finish_passes=0, cad_finish_gated=0.0)
     if sup_v is not None and automatic:  # CAD finish (round 9c)
         from .cadfinish import cad_finish, cad_finish_rule

@@ -12,6 +12,7 @@ from dataclasses import replace
 
 import numpy as np
 
+from . import crease_network as _cn
 from . import scalefree as _sf
 from .denoise_finish import (
     REINTEGRATE_KEEPS_FOLDS,
@@ -44,7 +45,7 @@ from .denoise_rules import (
 )
 from .errors import MeshRepairError
 from .noise import noise_statistics
-from .regions import crease_support, flat_edges
+from .regions import flat_edges
 from .relax import untangle
 from .reorder import _edge_values_to, locality_order
 from .scale import noise_scale, tangential_ratio
@@ -175,7 +176,9 @@ def _denoise(V, F, *, lam, th, a, robust_iters, feature_iters, mask_update_every
                                 topo=topo_w).solve(Vd, Vi)
                 tr = tangential_ratio(Vn_w, Fw, r1.V, topo=topo_w)
         r1_V = r1.V[inv] if reorder else r1.V
-        sup = crease_support(topo_w, r1.N, th=th)
+        sup, net = _cn.supported(topo_w, r1.N, th=th)  # crease support without noise chains
+        info.update(network_branching=net.branching, network_side_spread=net.side_spread,
+                    network_dropped=net.dropped, network_rejected=net.rejected)  # round 11d
         force = np.where(sup, -1, 0).astype(np.int8)
         sup_v = np.zeros(len(V), bool)
         sup_v[topo_w.edges[sup].ravel()] = True
@@ -212,7 +215,8 @@ def _denoise(V, F, *, lam, th, a, robust_iters, feature_iters, mask_update_every
 
         kp = presmooth_steps(gamma, info["tangential_ratio"],
                              support_fraction=info["support_fraction"],
-                             outside=info["outside_weight"], willmore=ww, impulsive=impulsive)
+                             outside=info["outside_weight"], willmore=ww, impulsive=impulsive,
+                             heavy=_cn.heavy_from_network(info["network_rejected"]))
         if kp:  # coarse-to-fine: the whole model runs again on the low-passed input
             log.info("heavy noise on an organic mesh: %d Taubin pairs on the input first", kp)
             Vp = presmooth(V, topo.edges, np.ones(len(V), bool), kp)  # every vertex (10h)
@@ -226,6 +230,7 @@ def _denoise(V, F, *, lam, th, a, robust_iters, feature_iters, mask_update_every
                          regions=regions, callback=callback, polish=False,  # 10h: not polished
                          presmoothed=True)
             r.params.update(presmooth_steps=kp, presmooth_noise_estimate=r.noise_estimate,
+                            presmooth_network_rejected=info["network_rejected"],
                             presmooth_tangential_ratio=info["tangential_ratio"],
                             presmooth_support_fraction=info["support_fraction"])
             r.noise_estimate = gamma
@@ -294,7 +299,7 @@ def _denoise(V, F, *, lam, th, a, robust_iters, feature_iters, mask_update_every
     V_out = finish_result(V, V_out, F, topo, M_E, data=Vd[inv] if reorder else Vd, sup_v=sup_v,
                           gamma=gamma, gamma_rms=gamma_rms, impulsive=impulsive, ww=ww,
                           w_cad=w_cad, automatic=willmore_weight is None, polish=polish,
-                          info=info)
+                          info=info, probe=r1_V)
     n_res_folded = 0
     if unfold and UNFOLD_RESULT and not (info["reintegrate_steps"] and REINTEGRATE_KEEPS_FOLDS
                                            and not impulsive):

@@ -79,8 +79,10 @@ def effective_level(gamma: float, tangential: float, weight: float = 1.0) -> flo
 def presmooth_steps(gamma: float, tangential: float, *, support_fraction: float,
                     outside: float, willmore: float, impulsive: bool,
                     gamma_p: float | None = None, gamma_min: float | None = None,
-                    max_steps: int | None = None) -> int:
-    """λ|μ pairs ``k`` of the module docstring, 0 when the gate does not fire."""
+                    max_steps: int | None = None, heavy: bool = False) -> int:
+    """λ|μ pairs ``k`` of the module docstring, 0 when the gate does not fire. ``heavy``: the
+    noise is known to be heavy for this mesh from another read than γ_t (round 11d,
+    :func:`meshrepair.crease_network.heavy_from_network`), so the level test is not asked."""
     from .denoise_rules import CAD_SUPPORT
 
     gp = GAMMA_P if gamma_p is None else float(gamma_p)
@@ -90,7 +92,7 @@ def presmooth_steps(gamma: float, tangential: float, *, support_fraction: float,
         return 0
     if not (support_fraction < CAD_SUPPORT) or not np.isfinite(gamma):
         return 0
-    if not effective_level(gamma, tangential, 2.0) > gm:
+    if not heavy and not effective_level(gamma, tangential, 2.0) > gm:
         return 0
     return int(np.clip(round((effective_level(gamma, tangential) / gp) ** 2), 0, cap))
 

@@ -208,8 +208,8 @@ def supported_chains(topo: Topology, N: np.ndarray, creased: np.ndarray, chains:
 def crease_support(topo: Topology, N: np.ndarray, *, th: float = 30.0,
                    min_chain: int = MIN_CHAIN, rings: int = RINGS, flat_rings: int = FLAT_RINGS,
                    flat_angle: float = FLAT_ANGLE, long_chain: int = LONG_CHAIN,
-                   persist_tol: float | None = PERSIST_TOL, side_spread: float = SIDE_SPREAD
-                   ) -> np.ndarray:
+                   persist_tol: float | None = PERSIST_TOL, side_spread: float = SIDE_SPREAD,
+                   chain_filter=None) -> np.ndarray:
     """The edges where a crease is supported (see the module docstring).
 
     Parameters
@@ -225,6 +225,8 @@ def crease_support(topo: Topology, N: np.ndarray, *, th: float = 30.0,
     persist_tol, side_spread : the shorter chains are kept only when their persistence ratio
         is within ``persist_tol`` of 1 and their side spread at most ``side_spread`` degrees
         (:func:`supported_chains`); ``persist_tol=None`` keeps every chain of ``L`` edges
+    chain_filter : optional ``f(topo, N, creased, chains) -> chains`` applied to the kept chains
+        before the dilation (round 11d: :func:`meshrepair.crease_network.drop_noise_chains`)
 
     Returns
     -------
@@ -236,6 +238,8 @@ def crease_support(topo: Topology, N: np.ndarray, *, th: float = 30.0,
     if persist_tol is not None and chains.any():
         chains = supported_chains(topo, N, cre, chains, long_chain=max(L, int(long_chain)),
                                   persist_tol=float(persist_tol), side_spread=float(side_spread))
+    if chain_filter is not None and chains.any():
+        chains = chain_filter(topo, N, cre, chains)
     nV = topo.n_vertices
     act = np.zeros(nV, bool)
     act[topo.edges[chains].ravel()] = True
