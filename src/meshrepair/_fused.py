@@ -69,6 +69,38 @@ if HAVE_NUMBA:
                 den += B[i, k] * B[i, k]
         return np.sqrt(num / max(den, 1e-300))
 
+    @njit(cache=True, fastmath=FASTMATH)
+    def _nb_willmore_extra(l, Nv, fa, fb, w, w0, skip):  # pragma: no cover - compiled
+        s = 0.0
+        for e in range(l.shape[0]):
+            dw = w[e] - w0
+            if skip[e] or dw == 0.0:
+                continue
+            a = fa[e]
+            b = fb[e]
+            d = 0.0
+            for k in range(3):
+                x = Nv[a, k] - Nv[b, k]
+                d += x * x
+            s += dw * l[e] * l[e] * d
+        return s
+
+
+def _np_willmore_extra(l, Nv, fa, fb, w, w0, skip):
+    f = np.flatnonzero(~skip)
+    tf = l[f, None] * (Nv[fa[f]] - Nv[fb[f]])
+    return float(((w[f] - w0) * np.einsum("ij,ij->i", tf, tf)).sum())
+
+
+def willmore_extra(l, Nv, fa, fb, w, w0, skip):
+    """The per-edge Willmore weights' share of the regulariser that
+    :func:`lengths_reg_energy` (weight ``w0`` on every smooth edge) leaves out:
+    ``Σ_{e ∉ skip} (w_e − w0) l_e² |Nv_{fa(e)} − Nv_{fb(e)}|²``, one pass without temporaries
+    (the numpy twin builds three ``(nE, 3)`` arrays: 0.15 s an iteration at 1.18M vertices)."""
+    if HAVE_NUMBA:
+        return float(_nb_willmore_extra(l, Nv, fa, fb, w, float(w0), skip))
+    return _np_willmore_extra(l, Nv, fa, fb, w, float(w0), skip)
+
 
 def normals_update_rho2(V, F, N, rho2, beta2):
     """Unit face normals ``Nv`` of ``V`` (zero rows for degenerate faces) and the multiplier

@@ -13,6 +13,7 @@ from dataclasses import replace
 import numpy as np
 
 from . import crease_network as _cn
+from . import scalefree as _sf
 from .denoise_finish import (
     REINTEGRATE_KEEPS_FOLDS,
     finish_result,
@@ -156,8 +157,9 @@ def _denoise(V, F, *, lam, th, a, robust_iters, feature_iters, mask_update_every
     if probe and stages[0].max_iter > 0:
         n1 = int(min(stages[0].max_iter, PROBE_MAX_ITERS))
         st1 = replace(stages[0], max_iter=n1, min_iter=min(stages[0].min_iter, n1))
-        # the probe is a one-stage run: its stage's switch rule becomes the stopping rule
-        kw1 = {**opts_kw, "tol": st1.switch_tol if PROBE_EARLY_STOP else opts_kw["tol"]}
+        # the probe is one stage: its switch rule (in edge units, round 11r) is the stop rule
+        q_edges = _sf.radius_in_edges(V, F, topo.edges)  # the mesh's radius in edge lengths
+        kw1 = {**opts_kw, "tol": _sf.probe_tol(st1, q_edges) if PROBE_EARLY_STOP else tol}
         Vn_w = V[pv] if reorder else V
         r1 = ADMMSolver(Fw, len(V), options=SolverOptions(stages=(st1,), **kw1),
                         topo=topo_w).solve(Vd, Vi)
@@ -187,21 +189,22 @@ def _denoise(V, F, *, lam, th, a, robust_iters, feature_iters, mask_update_every
             anchor = np.zeros(len(V))
             anchor[topo_w.edges[sup].ravel()] = 1.0
         info["tangential_ratio"] = tr
-        if n_unf and Vd is Vw and not unfolded_data_after_probe(impulsive, tr, float(sup.mean())):
+        sf = _sf.cad_support(topo_w, r1.N, sup, q_edges, th=th)  # round 11r: scale-free CAD
+        if n_unf and Vd is Vw and not unfolded_data_after_probe(impulsive, tr, sf):
             Vd, Vi = Vn_w, Vw  # noise with a tangential part: the input is the main run's data
         if lam is None and ww > 1.0:  # correlated noise: λ from its level at its own scale
             lam_used = lambda_from_noise(max(gamma, ns.gamma))
             opts_kw["lam"] = lam_used
-        w_out = outside_weight(float(sup.mean()), tr) if willmore_weight is None else 1.0
+        w_out = outside_weight(sf, tr) if willmore_weight is None else 1.0
         if w_out != 1.0:  # a CAD part: its smooth patches get the stronger smooth prior
             wedges = np.where(sup, ww, ww * w_out)
         info["outside_weight"] = w_out
         from . import organic_fidelity as _of
 
-        if lam is None and _of.applies(float(sup.mean()), ww, w_out, impulsive, ns.rho):
+        if lam is None and _of.applies(sf, ww, w_out, impulsive, ns.rho):
             lam_used = _of.main_lambda(gamma, tr, info, graded=not presmoothed)  # 10l, 11n
             opts_kw["lam"] = lam_used
-        info.update(support_fraction=float(sup.mean()), willmore_weight=ww,
+        info.update(support_fraction=sf, willmore_weight=ww,
                     noise_rho=ns.rho, noise_length=ns.length, noise_gamma_scale=ns.gamma)
         log.info("crease support on %.1f %% of the edges; noise correlation %.2f (length %.1f, "
                  "level %.3f); willmore weight %g", 100 * sup.mean(), ns.rho, ns.length,
@@ -231,7 +234,8 @@ def _denoise(V, F, *, lam, th, a, robust_iters, feature_iters, mask_update_every
                             presmooth_tangential_ratio=info["tangential_ratio"],
                             presmooth_noise_rho=info["noise_rho"],
                             presmooth_noise_length=info["noise_length"],
-                            presmooth_noise_gamma_scale=info["noise_gamma_scale"])
+                            presmooth_noise_gamma_scale=info["noise_gamma_scale"],
+                            presmooth_support_fraction=info["support_fraction"])
             r.noise_estimate = gamma
             from . import corrlowpass as _cl  # round 11q: at the noise's scale
 

@@ -262,10 +262,8 @@ class ADMMSolver:
                         l, reg = _fused.lengths_reg_energy(V, E_int, Nv, fa, fb, sh, stage.a,
                                                            o.willmore_weight)
                     if w_int is not None:  # per-edge Willmore weights on the smooth edges
-                        f = np.flatnonzero(~sh & ~fl) if mixed else np.flatnonzero(~sh)
-                        tf = l[f, None] * (Nv[fa[f]] - Nv[fb[f]])
-                        reg += float(((w_int[f] - o.willmore_weight)
-                                      * np.einsum("ij,ij->i", tf, tf)).sum())
+                        reg += _fused.willmore_extra(l, Nv, fa, fb, w_int, o.willmore_weight,
+                                                     (sh | fl) if mixed else sh)
                     entry = {
                         "iter": k,
                         "stage": stage.name,
