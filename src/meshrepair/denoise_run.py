@@ -232,8 +232,15 @@ def _denoise(V, F, *, lam, th, a, robust_iters, feature_iters, mask_update_every
             r.params.update(presmooth_steps=kp, presmooth_noise_estimate=r.noise_estimate,
                             presmooth_network_rejected=info["network_rejected"],
                             presmooth_tangential_ratio=info["tangential_ratio"],
+                            presmooth_noise_rho=info["noise_rho"],
+                            presmooth_noise_length=info["noise_length"],
+                            presmooth_noise_gamma_scale=info["noise_gamma_scale"],
                             presmooth_support_fraction=info["support_fraction"])
             r.noise_estimate = gamma
+            from . import corrlowpass as _cl  # round 11q: at the noise's scale
+
+            r.V = _cl.apply(r.V, F, topo, gamma, info, impulsive)
+            r.params["corr_lowpass_steps"] = info["corr_lowpass_steps"]
             return r
     info["presmooth_steps"] = 0
     Vi_main = Vi  # impulsive noise on a CAD part: the main run starts from the probe
@@ -306,6 +313,11 @@ def _denoise(V, F, *, lam, th, a, robust_iters, feature_iters, mask_update_every
         V_out, n_res_folded = unfold_result(V_out, topo, r1_V)
         if n_res_folded:
             log.info("unfolded %d faces folded over in the result", n_res_folded)
+    info["corr_lowpass_steps"] = 0
+    if sup_v is not None and willmore_weight is None and lam is None and not presmoothed:
+        from . import corrlowpass as _cl  # round 11q: correlated noise at the noise's scale
+
+        V_out = _cl.apply(V_out, F, topo, gamma, info, impulsive)
     return DenoiseResult(
         V=V_out,
         F=F,

@@ -1,0 +1,98 @@
+"""Correlated noise on smooth organic meshes: a low-pass at the noise's scale (issue 12, round 11q).
+
+Spatially correlated noise (scanner noise: bumps ``ℓ`` rings wide) on an organic mesh is read by
+the multi-scale profile of :mod:`meshrepair.scale` (``ρ = s_2/s_1`` well above 1, correlation
+length ``ℓ = √m``), but such noise usually reads a tangential ratio ``r_t ≥ 0.65`` (its
+high-passed normal part is small), so the Willmore weight stays 1 and the schedule treats it as
+white: the one-ring low-pass of :mod:`meshrepair.lowpass` (``k = 1-2`` pairs) and the one-ring
+guidance of :mod:`meshrepair.organic` act at the wrong scale and leave the bumps (synthetic
+``correlated_noise`` m = 4, γ = 0.5 on nicolo / pierrot / igea: 49-60 % of the noisy MSAE is
+left; docs/parameters.md, round 11q).
+
+**The step.** Taubin's λ|μ filter (1995, :func:`meshrepair.lowpass.taubin_region`, full step,
+λ = 0.5, μ = −0.53) on the finished result, every vertex except those of faces still folded
+and two rings around them (:func:`meshrepair.coarse.free_vertices`). On the eigenvalue
+``x ∈ [0, 2]`` of ``I − W`` one pair has the transfer ``t(x) = (1 − λx)(1 − μx)``: 1 at
+``x = 0``, no shrinkage in the pass band ``x < 1/λ + 1/μ``, < 1 above, so ``k`` pairs remove
+the wavelengths below ≈ √k rings. Bumps of correlation length ``ℓ`` and one-ring level ``γ̂``
+(the MAD level of :func:`meshrepair.noise.noise_statistics`, which reads the part of the bump
+that changes over one ring) carry a slope ``≈ γ̂`` per ring over ``ℓ`` rings, an amplitude
+``≈ ℓ γ̂``; the filter's width is taken proportional to it (the diffusion time to ``(ℓγ̂)²``,
+as :mod:`meshrepair.lowpass` does with ``γ̂`` for white noise):
+
+.. math:: k = \\mathrm{clip}\\bigl(\\mathrm{round}((ℓ\\,γ̂ / γ_q)^2),\\, 0,\\, K_{max}\\bigr),
+          \\qquad γ_q = 0.02,\\ K_{max} = 160.
+
+**The gate** (:func:`corr_steps`): an organic mesh (crease support below
+:data:`meshrepair.denoise_rules.CAD_SUPPORT`, outside weight 1), not impulsive, the probe's
+profile correlated, ``ρ ≥ ρ_0 = 1.4`` (white Gaussian inputs read 0.83-1.12, the white
+false positives of low noise on irregular meshes up to 1.35, the real Kinect scan 1.22), and
+the one-ring level above ``γ_0 = 0.095``: below it the solve has already taken the roughness and
+what is left is mostly the surface's own relief, which a long low-pass removes (m = 4 γ = 0.3
+and m = 8 γ = 0.6 rows read γ̂ 0.068-0.084 and lose 0.6-5.4 % from the first 10 pairs; the m = 4
+γ = 0.5 rows read 0.102-0.110 and gain 4-18 %). Values read off the design rows of
+docs/parameters.md, round 11q (bunny, nicolo and the published truths igea, pierrot).
+The readings are those of the first run (the input), also when the coarse-to-fine run of
+:mod:`meshrepair.presmooth` follows; the step then acts on that run's result.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+CORR_LOWPASS = True
+RHO_0 = 1.4
+GAMMA_0 = 0.095
+GAMMA_Q = 0.02
+MAX_STEPS = 160
+
+
+def corr_steps(gamma: float, rho: float, length: float, *, support_fraction: float,
+               outside: float, impulsive: bool) -> int:
+    """λ|μ pairs ``k = clip(round((ℓ γ̂/γ_q)²), 0, K_max)`` of the module docstring; 0 when the
+    gate does not fire (NaN readings never fire)."""
+    from .denoise_rules import CAD_SUPPORT
+
+    if not CORR_LOWPASS or impulsive or outside != 1.0:
+        return 0
+    vals = (gamma, rho, length, support_fraction)
+    if not all(np.isfinite(v) for v in vals) or not support_fraction < CAD_SUPPORT:
+        return 0
+    if not (rho >= RHO_0 and gamma > GAMMA_0):
+        return 0
+    return int(np.clip(round((float(length) * float(gamma) / GAMMA_Q) ** 2), 0, MAX_STEPS))
+
+
+def corr_lowpass(V: np.ndarray, F: np.ndarray, topo, steps: int) -> np.ndarray:
+    """``steps`` full λ|μ pairs on every vertex not on or near a folded face; a new array.
+
+    Parameters
+    ----------
+    V : (nV, 3) float64, the finished result
+    F : (nF, 3) int64
+    topo : the edge topology of ``F``
+    steps : λ|μ pairs (0 returns a copy)
+
+    Returns
+    -------
+    (nV, 3) float64
+    """
+    from .coarse import free_vertices
+    from .lowpass import taubin_region
+
+    V = np.array(V, dtype=np.float64)
+    if steps <= 0:
+        return V
+    return taubin_region(V, topo.edges, free_vertices(V, F, topo), int(steps))
+
+
+def apply(V_out: np.ndarray, F: np.ndarray, topo, gamma: float, info: dict,
+          impulsive: bool) -> np.ndarray:
+    """The rule on ``denoise``'s result from the first run's readings in ``info``; records
+    ``corr_lowpass_steps`` in ``info`` and returns the (new or same) vertices."""
+    k = corr_steps(gamma, info.get("noise_rho", float("nan")),
+                   info.get("noise_length", float("nan")),
+                   support_fraction=info.get("support_fraction", float("nan")),
+                   outside=info.get("outside_weight", 1.0), impulsive=impulsive)
+    info["corr_lowpass_steps"] = k
+    return corr_lowpass(V_out, F, topo, k) if k else V_out
