@@ -26,6 +26,11 @@ so ``rms |ΔV| / l̄ < τ \\min(q, Q_0)``: unchanged on every mesh with ``q ≤ 
 benchmark inputs read 14-44, bunny the largest), the same step length in edge units on every
 finer mesh, whatever its resolution.
 
+Round 11s gates it (:func:`gated_probe`): on a mesh with ``q > Q_0`` the probe first stops at
+``τ``; it goes on to ``τ_eff`` (for the iterations left) only when that probe's
+crease-supported region is not empty, so a fine organic mesh that reads no crease keeps the
+relative stop.
+
 **2. The CAD-part test.** Round 4 calls a mesh a CAD part when the crease-supported region C
 (chains dilated by 2 rings, :func:`meshrepair.regions.crease_support`) covers
 ``f = |C| / n_E ≥ 0.2`` of the edges. A crease network is a set of *lines* of the shape: its
