@@ -157,3 +157,73 @@ def test_willmore_extra_kernel_matches_its_numpy_twin():
                 for e in np.flatnonzero(f))
     assert want == pytest.approx(brute, rel=1e-12)
     assert _fused.willmore_extra(l, Nv, fa, fb, w, 1.0, skip) == pytest.approx(want, rel=1e-12)
+
+
+def test_two_phase_gate_reads_q_and_the_switches(monkeypatch):
+    """Round 11s: two phases only above Q_0 with rule 1 and the gate on; the second phase only
+    when the first reads a non-empty crease-supported region."""
+    import meshrepair.scalefree as sf
+
+    assert not sf.two_phase(Q_REF) and not sf.two_phase(0.5 * Q_REF)
+    assert sf.two_phase(Q_REF * 1.01) and sf.two_phase(10 * Q_REF)
+    assert not sf.continue_probe(0.0) and sf.continue_probe(1e-6)
+    monkeypatch.setattr(sf, "GATED_STOP", False)
+    assert not sf.two_phase(10 * Q_REF)
+    monkeypatch.setattr(sf, "GATED_STOP", True)
+    monkeypatch.setattr(sf, "SCALE_FREE_STOP", False)
+    assert not sf.two_phase(10 * Q_REF)
+
+
+def _recording_solver():
+    from meshrepair.solver import ADMMSolver
+
+    calls = []
+
+    class Rec(ADMMSolver):
+        def solve(self, V0, V_init=None, **kw):
+            r = super().solve(V0, V_init, **kw)
+            calls.append((self.options.tol, self.options.stages[0].max_iter, r.iterations,
+                          None if V_init is None else np.array(V_init)))
+            return r
+
+    return Rec, calls
+
+
+@pytest.mark.parametrize("shape", ["box", "sphere"])
+def test_gated_probe_phases_tolerances_and_iterations(shape):
+    """Phase 1 stops at the relative tolerance switch_tol; a box (creases) goes on, from phase
+    1's vertices, with the scale-free tolerance for the iterations left; a smooth sphere (no
+    crease-supported edge) stops after phase 1. The iterations add up."""
+    from meshrepair.denoise_run import default_stages
+    from meshrepair.scalefree import gated_probe, probe_tol
+    from meshrepair.solver import SolverOptions
+    from meshrepair.topology import edge_topology
+
+    if shape == "box":
+        V, F = _box(3)
+    else:
+        m = trimesh.creation.icosphere(subdivisions=3)
+        V, F = np.asarray(m.vertices, float), np.asarray(m.faces, np.int64)
+    topo = edge_topology(F, len(V))
+    from meshrepair import add_noise
+
+    V = add_noise(V, F, 0.2, seed=0)
+    from dataclasses import replace
+
+    st = replace(default_stages(robust_iters=300)[0], switch_tol=2e-3)  # a small mesh: looser
+    q = 4 * Q_REF  # rule 1's tolerance a quarter of switch_tol
+    kw = {"tol": probe_tol(st, q)}
+    assert kw["tol"] == pytest.approx(st.switch_tol / 4)
+    Rec, calls = _recording_solver()
+    r = gated_probe(Rec, SolverOptions, F, len(V), topo, st, kw, V, None, q, 30.0)
+    assert calls[0][0] == pytest.approx(st.switch_tol) and calls[0][1] == st.max_iter
+    assert calls[0][2] < st.max_iter  # phase 1 stops on its rule
+    if shape == "box":
+        assert r.probe_phases == 2 and r.probe_gate_support > 0
+        tol2, max2, it2, Vi2 = calls[1]
+        assert tol2 == pytest.approx(st.switch_tol / 4)
+        assert max2 == st.max_iter - calls[0][2]
+        assert r.iterations == calls[0][2] + it2
+        assert Vi2 is not None
+    else:
+        assert r.probe_phases == 1 and r.probe_gate_support == 0.0 and len(calls) == 1

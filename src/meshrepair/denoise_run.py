@@ -161,8 +161,17 @@ def _denoise(V, F, *, lam, th, a, robust_iters, feature_iters, mask_update_every
         q_edges = _sf.radius_in_edges(V, F, topo.edges)  # the mesh's radius in edge lengths
         kw1 = {**opts_kw, "tol": _sf.probe_tol(st1, q_edges) if PROBE_EARLY_STOP else tol}
         Vn_w = V[pv] if reorder else V
-        r1 = ADMMSolver(Fw, len(V), options=SolverOptions(stages=(st1,), **kw1),
-                        topo=topo_w).solve(Vd, Vi)
+
+        def run_probe(kw):
+            """The probe; round 11s: to the relative stop, then on to 11r's scale-free stop
+            only when that probe already reads crease-like chains (:func:`scalefree.gated`)."""
+            if not (PROBE_EARLY_STOP and _sf.two_phase(q_edges)):
+                return ADMMSolver(Fw, len(V), options=SolverOptions(stages=(st1,), **kw),
+                                  topo=topo_w).solve(Vd, Vi)
+            return _sf.gated_probe(ADMMSolver, SolverOptions, Fw, len(V), topo_w, st1, kw,
+                                   Vd, Vi, q_edges, th)
+
+        r1 = run_probe(kw1)
         tr = tangential_ratio(Vn_w, Fw, r1.V, topo=topo_w)
         ns = noise_scale(Vn_w, Fw, reference=r1.V, topo=topo_w)
         if willmore_weight is None:
@@ -172,8 +181,7 @@ def _denoise(V, F, *, lam, th, a, robust_iters, feature_iters, mask_update_every
             opts_kw["inner_iters"] = inner_iters
             if inner_iters != kw1["inner_iters"]:
                 kw1["inner_iters"] = inner_iters
-                r1 = ADMMSolver(Fw, len(V), options=SolverOptions(stages=(st1,), **kw1),
-                                topo=topo_w).solve(Vd, Vi)
+                r1 = run_probe(kw1)
                 tr = tangential_ratio(Vn_w, Fw, r1.V, topo=topo_w)
         r1_V = r1.V[inv] if reorder else r1.V
         sup, net = _cn.supported(topo_w, r1.N, th=th)  # crease support without noise chains

@@ -26,6 +26,11 @@ so ``rms |ΔV| / l̄ < τ \\min(q, Q_0)``: unchanged on every mesh with ``q ≤ 
 benchmark inputs read 14-44, bunny the largest), the same step length in edge units on every
 finer mesh, whatever its resolution.
 
+Round 11s gates it (:func:`gated_probe`): on a mesh with ``q > Q_0`` the probe first stops at
+``τ``; it goes on to ``τ_eff`` (for the iterations left) only when that probe's
+crease-supported region is not empty, so a fine organic mesh that reads no crease keeps the
+relative stop.
+
 **2. The CAD-part test.** Round 4 calls a mesh a CAD part when the crease-supported region C
 (chains dilated by 2 rings, :func:`meshrepair.regions.crease_support`) covers
 ``f = |C| / n_E ≥ 0.2`` of the edges. A crease network is a set of *lines* of the shape: its
@@ -136,3 +141,55 @@ def cad_support(topo, N: np.ndarray, support: np.ndarray, q: float, *,
     if not SCALE_FREE_CAD or f >= CAD_SUPPORT or not q > Q_CAD:
         return f
     return max(f, crease_like_share(topo, N, support, th=th) * float(q) / Q_CAD)
+
+
+# Round 11s: the scale-free stop of rule 1 only where the probe already reads a crease
+GATED_STOP = True
+GATE_SUPPORT = 0.0  # continue when f = |C| / n_E at the relative stop exceeds this
+
+
+def two_phase(q: float) -> bool:
+    """Whether the probe of a mesh with radius ``q`` (edge lengths) runs in two phases
+    (round 11s): rule 1 on, the gate on and ``q > Q_0`` (below it both stops coincide)."""
+    return bool(SCALE_FREE_STOP and GATED_STOP and q > Q_REF)
+
+
+def continue_probe(support: float) -> bool:
+    """The gate of round 11s: the probe stopped at the relative tolerance goes on to the
+    scale-free one only when its crease-supported region C is not empty there,
+    ``f = |C| / n_E > GATE_SUPPORT`` (a supported crease chain already read)."""
+    return bool(support > GATE_SUPPORT)
+
+
+def gated_probe(solver_cls, options_cls, F, n_vertices, topo, stage, kw, Vd, Vi, q, th):
+    """Round 11s's two-phase probe of a mesh of radius ``q`` (edge lengths).
+
+    Phase 1 stops at the relative tolerance ``stage.switch_tol``; when :func:`continue_probe`
+    reads a crease-supported region on its normals, phase 2 restarts the same stage from
+    phase 1's vertices for the iterations left, with rule 1's tolerance ``kw['tol']``
+    (``switch_tol · Q_0 / q``). Returns the last phase's result, its ``iterations`` the sum of
+    both phases, with ``probe_phases`` (1 or 2) and ``probe_gate_support`` (f at phase 1).
+    """
+    import logging
+    from dataclasses import replace
+
+    from . import crease_network as _cn
+
+    r = solver_cls(F, n_vertices, options=options_cls(
+        stages=(stage,), **{**kw, "tol": float(stage.switch_tol)}), topo=topo).solve(Vd, Vi)
+    r.probe_phases, r.probe_gate_support = 1, float("nan")
+    left = int(stage.max_iter) - int(r.iterations)
+    if left <= 0 or r.stop_reason == "callback":
+        return r
+    f = float(_cn.supported(topo, r.N, th=th)[0].mean())
+    r.probe_gate_support = f
+    logging.getLogger(__name__).info("probe phase 1 (q %.1f): %d iterations, support %.4f",
+                                     q, r.iterations, f)
+    if not continue_probe(f):
+        return r
+    st_b = replace(stage, max_iter=left, min_iter=min(int(stage.min_iter), left))
+    r2 = solver_cls(F, n_vertices, options=options_cls(stages=(st_b,), **kw),
+                    topo=topo).solve(Vd, r.V)
+    r2.iterations += r.iterations
+    r2.probe_phases, r2.probe_gate_support = 2, f
+    return r2
