@@ -227,3 +227,9 @@ def test_gated_probe_phases_tolerances_and_iterations(shape):
         assert Vi2 is not None
     else:
         assert r.probe_phases == 1 and r.probe_gate_support == 0.0 and len(calls) == 1
+        # the gate's read is handed on, equal to reading the result's normals again
+        from meshrepair.crease_network import supported
+
+        sup, net = supported(topo, r.N, th=30.0)
+        np.testing.assert_array_equal(r.crease_support[0], sup)
+        assert r.crease_support[1].rejected == net.rejected

@@ -164,7 +164,7 @@ def _denoise(V, F, *, lam, th, a, robust_iters, feature_iters, mask_update_every
 
         def run_probe(kw):
             """The probe; round 11s: to the relative stop, then on to 11r's scale-free stop
-            only when that probe already reads crease-like chains (:func:`scalefree.gated`)."""
+            only when that probe already reads crease support (:func:`scalefree.gated_probe`)."""
             if not (PROBE_EARLY_STOP and _sf.two_phase(q_edges)):
                 return ADMMSolver(Fw, len(V), options=SolverOptions(stages=(st1,), **kw),
                                   topo=topo_w).solve(Vd, Vi)
@@ -184,7 +184,8 @@ def _denoise(V, F, *, lam, th, a, robust_iters, feature_iters, mask_update_every
                 r1 = run_probe(kw1)
                 tr = tangential_ratio(Vn_w, Fw, r1.V, topo=topo_w)
         r1_V = r1.V[inv] if reorder else r1.V
-        sup, net = _cn.supported(topo_w, r1.N, th=th)  # crease support without noise chains
+        cs = getattr(r1, "crease_support", None)  # read by round 11s's gate on these normals
+        sup, net = cs if cs is not None else _cn.supported(topo_w, r1.N, th=th)  # without noise
         info.update(network_branching=net.branching, network_side_spread=net.side_spread,
                     network_dropped=net.dropped, network_rejected=net.rejected)  # round 11d
         force = np.where(sup, -1, 0).astype(np.int8)

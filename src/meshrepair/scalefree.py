@@ -169,6 +169,8 @@ def gated_probe(solver_cls, options_cls, F, n_vertices, topo, stage, kw, Vd, Vi,
     phase 1's vertices for the iterations left, with rule 1's tolerance ``kw['tol']``
     (``switch_tol · Q_0 / q``). Returns the last phase's result, its ``iterations`` the sum of
     both phases, with ``probe_phases`` (1 or 2) and ``probe_gate_support`` (f at phase 1).
+    When phase 2 does not run, the result also carries ``crease_support``, the
+    ``crease_network.supported`` read of its normals, so the caller does not compute it again.
     """
     import logging
     from dataclasses import replace
@@ -181,7 +183,8 @@ def gated_probe(solver_cls, options_cls, F, n_vertices, topo, stage, kw, Vd, Vi,
     left = int(stage.max_iter) - int(r.iterations)
     if left <= 0 or r.stop_reason == "callback":
         return r
-    f = float(_cn.supported(topo, r.N, th=th)[0].mean())
+    r.crease_support = _cn.supported(topo, r.N, th=th)  # phase 1's (support, network)
+    f = float(r.crease_support[0].mean())
     r.probe_gate_support = f
     logging.getLogger(__name__).info("probe phase 1 (q %.1f): %d iterations, support %.4f",
                                      q, r.iterations, f)
