@@ -41,7 +41,7 @@ rings reads ``ρ ≤ 1.12`` (as white noise does) but a band ratio ``β = b_1/b_
 probe's result, white-normalised). Where branch 1 does not fire, on the same organic,
 non-impulsive meshes, the step also runs when
 
-.. math:: γ̂ > γ_1 = 0.13, \qquad β ≥ β_0 = 1.2, \qquad τ < τ_0 = 0.45,
+.. math:: γ̂ > γ_1 = 0.13, \\qquad β ≥ β_0 = 1.2, \\qquad τ < τ_0 = 0.45,
 
 with ``k = clip(round((ℓ_β γ̂ / γ_q)²), 0, K_max)``, ``ℓ_β = √m̂`` the band read's own length
 (the ``m`` whose white-model ratio ``β(m)`` is nearest). ``β₀ = 1.2`` is the model's ``β(1)``
