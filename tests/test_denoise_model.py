@@ -76,7 +76,7 @@ def test_huber_fidelity_energy_decreases_and_caps_outliers():
 
 # -- noise scale -----------------------------------------------------------------------------
 
-@pytest.mark.parametrize("steps", [0, 4, 8])
+@pytest.mark.parametrize("steps", [0, 2, 4, 8])
 def test_noise_scale_on_correlated_noise_of_known_scale(steps):
     V, F = grid(60)
     Vn = correlated_noise(V, F, 0.3, steps, seed=1)
@@ -85,7 +85,8 @@ def test_noise_scale_on_correlated_noise_of_known_scale(steps):
         assert est.steps <= 1 and abs(est.rho - 1) < 0.1
     else:
         assert abs(est.length - np.sqrt(steps)) <= 0.25 * np.sqrt(steps)
-        assert est.rho > 1.3
+        # m = 2 reads ρ ≈ 1.03-1.09 like white noise (round 11y: the band read sees it)
+        assert est.rho > (1.3 if steps >= 4 else 0.95)
     assert abs(est.gamma - 0.3) <= 0.25 * 0.3
 
 

@@ -34,6 +34,24 @@ and m = 8 γ = 0.6 rows read γ̂ 0.068-0.084 and lose 0.6-5.4 % from the first 
 docs/parameters.md, round 11q (bunny, nicolo and the published truths igea, pierrot).
 The readings are those of the first run (the input), also when the coarse-to-fine run of
 :mod:`meshrepair.presmooth` follows; the step then acts on that run's result.
+
+**Branch 2 (round 11y): correlated noise that reads white.** Noise correlated over ``√2``
+rings reads ``ρ ≤ 1.12`` (as white noise does) but a band ratio ``β = b_1/b_0 ≈ 1.4``
+(:mod:`meshrepair.corrwhite`: the finest two octaves ``I − W``, ``W − W²`` of the input minus the
+probe's result, white-normalised). Where branch 1 does not fire, on the same organic,
+non-impulsive meshes, the step also runs when
+
+.. math:: γ̂ > γ_1 = 0.13, \\qquad β ≥ β_0 = 1.2, \\qquad τ < τ_0 = 0.45,
+
+with ``k = clip(round((ℓ_β γ̂ / γ_q)²), 0, K_max)``, ``ℓ_β = √m̂`` the band read's own length
+(the ``m`` whose white-model ratio ``β(m)`` is nearest). ``β₀ = 1.2`` is the model's ``β(1)``
+(white noise along the normals reads 0.96-1.07 at ``γ̂ > 0.13`` on the design meshes, m = 2
+fields 1.24-1.39); ``τ < τ₀`` keeps noise in random directions out (it raises ``β`` too, through
+its tangential part: 1.26-1.50, but reads τ ≥ 0.58, the m = 2 fields ≤ 0.27); ``γ₁`` keeps low
+white noise out, where the relief's cross terms dominate ``b_1`` (γ = 0.1 rows read γ̂ 0.08-0.12
+and β up to 1.40; m = 2 fields at γ ≥ 0.3 read γ̂ ≥ 0.15). Read off the design rows of
+docs/parameters.md, round 11y (spot, rocker_arm, fandisk fields). The band read costs a few
+sparse products and is computed only where the other conditions of branch 2 hold.
 """
 
 from __future__ import annotations
@@ -45,12 +63,43 @@ RHO_0 = 1.4
 GAMMA_0 = 0.095
 GAMMA_Q = 0.02
 MAX_STEPS = 160
+CORR_WHITE = True  # round 11y: branch 2
+GAMMA_1 = 0.13
+BETA_0 = 1.2
+TAU_0 = 0.45
+
+
+def _organic(gamma, support_fraction, outside, impulsive) -> bool:
+    from .denoise_rules import CAD_SUPPORT
+
+    if not CORR_LOWPASS or impulsive or outside != 1.0:
+        return False
+    vals = (gamma, support_fraction)
+    return all(np.isfinite(v) for v in vals) and support_fraction < CAD_SUPPORT
+
+
+def band_gate(gamma: float, *, support_fraction: float, outside: float,
+              impulsive: bool) -> bool:
+    """Whether branch 2 needs the band read at all (organic, not impulsive, ``γ̂ > γ_1``)."""
+    return bool(CORR_WHITE and _organic(gamma, support_fraction, outside, impulsive)
+                and gamma > GAMMA_1)
+
+
+def white_steps(gamma: float, beta: float, tau: float, length: float) -> int:
+    """Branch 2: ``k = clip(round((ℓ_β γ̂/γ_q)²), 0, K_max)`` when ``γ̂ > γ_1``, ``β ≥ β_0``
+    and ``τ < τ_0`` (module docstring); 0 otherwise (NaN never fires)."""
+    vals = (gamma, beta, tau, length)
+    if not CORR_WHITE or not all(np.isfinite(v) for v in vals):
+        return 0
+    if not (gamma > GAMMA_1 and beta >= BETA_0 and tau < TAU_0):
+        return 0
+    return int(np.clip(round((float(length) * float(gamma) / GAMMA_Q) ** 2), 0, MAX_STEPS))
 
 
 def corr_steps(gamma: float, rho: float, length: float, *, support_fraction: float,
                outside: float, impulsive: bool) -> int:
-    """λ|μ pairs ``k = clip(round((ℓ γ̂/γ_q)²), 0, K_max)`` of the module docstring; 0 when the
-    gate does not fire (NaN readings never fire)."""
+    """λ|μ pairs ``k = clip(round((ℓ γ̂/γ_q)²), 0, K_max)`` of the module docstring (branch 1);
+    0 when the gate does not fire (NaN readings never fire)."""
     from .denoise_rules import CAD_SUPPORT
 
     if not CORR_LOWPASS or impulsive or outside != 1.0:
@@ -87,12 +136,26 @@ def corr_lowpass(V: np.ndarray, F: np.ndarray, topo, steps: int) -> np.ndarray:
 
 
 def apply(V_out: np.ndarray, F: np.ndarray, topo, gamma: float, info: dict,
-          impulsive: bool) -> np.ndarray:
+          impulsive: bool, V_in: np.ndarray | None = None,
+          probe: np.ndarray | None = None) -> np.ndarray:
     """The rule on ``denoise``'s result from the first run's readings in ``info``; records
-    ``corr_lowpass_steps`` in ``info`` and returns the (new or same) vertices."""
+    ``corr_lowpass_steps`` (and branch 2's ``band_beta``, ``band_tau``, ``band_length``, NaN
+    where the band read was not needed) in ``info`` and returns the (new or same) vertices.
+    ``V_in`` (the input) and ``probe`` (the probe's result) feed branch 2's band read."""
+    kw = dict(support_fraction=info.get("support_fraction", float("nan")),
+              outside=info.get("outside_weight", 1.0), impulsive=impulsive)
     k = corr_steps(gamma, info.get("noise_rho", float("nan")),
-                   info.get("noise_length", float("nan")),
-                   support_fraction=info.get("support_fraction", float("nan")),
-                   outside=info.get("outside_weight", 1.0), impulsive=impulsive)
+                   info.get("noise_length", float("nan")), **kw)
+    info.update(band_beta=float("nan"), band_tau=float("nan"), band_length=float("nan"))
+    if not k and V_in is not None and probe is not None and band_gate(gamma, **kw):
+        from .corrwhite import band_read
+
+        br = band_read(V_in, F, reference=probe, topo=topo)
+        info.update(band_beta=br.beta, band_tau=br.tau, band_length=br.length)
+        k = white_steps(gamma, br.beta, br.tau, br.length)
     info["corr_lowpass_steps"] = k
     return corr_lowpass(V_out, F, topo, k) if k else V_out
+
+
+RECORDED = ("corr_lowpass_steps", "band_beta", "band_tau", "band_length")
+"""The keys :func:`apply` records in ``info``."""

@@ -248,8 +248,8 @@ def _denoise(V, F, *, lam, th, a, robust_iters, feature_iters, mask_update_every
             r.noise_estimate = gamma
             from . import corrlowpass as _cl  # round 11q: at the noise's scale
 
-            r.V = _cl.apply(r.V, F, topo, gamma, info, impulsive)
-            r.params["corr_lowpass_steps"] = info["corr_lowpass_steps"]
+            r.V = _cl.apply(r.V, F, topo, gamma, info, impulsive, V, r1_V)
+            r.params.update({k_: info[k_] for k_ in _cl.RECORDED})
             return r
     info["presmooth_steps"] = 0
     Vi_main = Vi  # impulsive noise on a CAD part: the main run starts from the probe
@@ -322,11 +322,12 @@ def _denoise(V, F, *, lam, th, a, robust_iters, feature_iters, mask_update_every
         V_out, n_res_folded = unfold_result(V_out, topo, r1_V)
         if n_res_folded:
             log.info("unfolded %d faces folded over in the result", n_res_folded)
-    info["corr_lowpass_steps"] = 0
+    info.update(corr_lowpass_steps=0, band_beta=float("nan"), band_tau=float("nan"),
+                band_length=float("nan"))
     if sup_v is not None and willmore_weight is None and lam is None and not presmoothed:
         from . import corrlowpass as _cl  # round 11q: correlated noise at the noise's scale
 
-        V_out = _cl.apply(V_out, F, topo, gamma, info, impulsive)
+        V_out = _cl.apply(V_out, F, topo, gamma, info, impulsive, V, r1_V)
     return DenoiseResult(
         V=V_out,
         F=F,
