@@ -135,7 +135,9 @@ def free_vertices(V: np.ndarray, F: np.ndarray, topo, rings: int = FOLD_RINGS) -
 
 
 def coarse_lowpass(V: np.ndarray, F: np.ndarray, topo, steps: int, *, normal: bool,
-                   unfold: bool = True, reference: np.ndarray | None = None) -> np.ndarray:
+                   unfold: bool = True, reference: np.ndarray | None = None,
+                   layout: np.ndarray | None = None,
+                   tangential: float = float("nan")) -> np.ndarray:
     """``steps`` λ|μ pairs of :func:`meshrepair.lowpass.taubin_region` (projected on the
     vertex normals when ``normal``); a new array.
 
@@ -149,9 +151,12 @@ def coarse_lowpass(V: np.ndarray, F: np.ndarray, topo, steps: int, *, normal: bo
     holds too are not features on a surface that is smooth at the mesh's resolution, the filter
     takes them). Without ``unfold`` (the folds ``denoise`` keeps on purpose after the
     re-integration of round 9) the faces folded in ``V`` and :data:`FOLD_RINGS` rings around
-    them do not move (:func:`free_vertices`).
+    them do not move (:func:`free_vertices`). With ``layout`` (the run's input) the full step's
+    surface is resampled at that layout (round 11x, :func:`meshrepair.layoutkeep.apply`, which
+    reads ``tangential``, r_t); the normal-only step keeps the layout already.
     """
     from .denoise_folds import unfold_result
+    from .layoutkeep import apply as keep_layout
     from .lowpass import taubin_region
 
     if unfold:
@@ -159,4 +164,5 @@ def coarse_lowpass(V: np.ndarray, F: np.ndarray, topo, steps: int, *, normal: bo
         free = np.ones(len(V), bool)
     else:
         free = free_vertices(V, F, topo)
-    return taubin_region(V, topo.edges, free, int(steps), F=F if normal else None)
+    X = taubin_region(V, topo.edges, free, int(steps), F=F if normal else None)
+    return X if normal else keep_layout(X, layout, F, topo.edges, tangential, free)

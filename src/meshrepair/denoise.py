@@ -65,6 +65,10 @@ and the chain itself branch (β > 0.2) and have rough sides (s > 5.5°): noise, 
 (:mod:`meshrepair.crease_network`); when that removed part of C, the noise is read as heavy for
 this mesh and the round-10h gate does not ask for γ_t > 0.32.
 
+Round 11x: the full Taubin steps of rounds 10h and 11c keep the input's vertex layout: the
+low-passed surface is resampled at it (:mod:`meshrepair.layoutkeep`); the coarse-to-fine run
+reads its noise level and tangential ratio on the low-passed mesh before the resampling.
+
 Throughout: λ = ``clip(0.02 / γ̂², 0.05, 1)``; the Willmore weight ``w`` from ρ for correlated
 noise along the normals (:func:`willmore_weight_from_scale`) and then ``3 max(1, ℓ²)`` V-steps
 per iteration for its correlation length ℓ, the probe included (:func:`inner_iters_from_scale`);

@@ -199,7 +199,8 @@ def finish_result(V, V_out, F, topo, M_E, *, data, sup_v, gamma, gamma_rms, impu
                 nrm = _co.normal_only(info["tangential_ratio"], gamma)
                 keep = bool(info["reintegrate_steps"]) and not impulsive  # its folds are kept
                 V_out = _co.coarse_lowpass(V_out, F, topo, kc, normal=nrm, unfold=not keep,
-                                           reference=probe)
+                                           reference=probe, layout=V,
+                                           tangential=info["tangential_ratio"])
                 info["coarse_steps"] = kc
     info.update(cad_finish_passes=0, cad_finish_gated=0.0)
     if sup_v is not None and automatic:  # CAD finish (round 9c)

@@ -77,7 +77,7 @@ def default_stages(*, robust_iters: int = 40, feature_iters: int = 60, a: float 
 def _denoise(V, F, *, lam, th, a, robust_iters, feature_iters, mask_update_every,
              min_feature_edges, tol, unfold, inner_solver, inner_iters, n_solver, stages,
              huber_delta, willmore_weight, regions, callback, polish=True,
-             presmoothed: bool = False) -> DenoiseResult:
+             presmoothed: bool = False, read_from: np.ndarray | None = None) -> DenoiseResult:
     from .options import check_bool, check_int, check_number
     from .validate import _check_mesh
 
@@ -106,7 +106,8 @@ def _denoise(V, F, *, lam, th, a, robust_iters, feature_iters, mask_update_every
                   min_feature_edges=min_feature_edges,
                   **({"stages": stages} if stages else {})).validate()
     report, topo = _check_mesh(V, F, name="input mesh")
-    gamma, gamma_rms = noise_statistics(V, F, topo)
+    Vr = V if read_from is None else read_from  # round 11x: the readings' vertices
+    gamma, gamma_rms = noise_statistics(Vr, F, topo)
     impulsive = is_impulsive(gamma, gamma_rms)
     lam_used = lambda_from_noise(gamma) if lam is None else float(lam)
     delta = huber_from_noise(gamma, gamma_rms) if huber_delta is None else float(huber_delta)
@@ -161,6 +162,7 @@ def _denoise(V, F, *, lam, th, a, robust_iters, feature_iters, mask_update_every
         q_edges = _sf.radius_in_edges(V, F, topo.edges)  # the mesh's radius in edge lengths
         kw1 = {**opts_kw, "tol": _sf.probe_tol(st1, q_edges) if PROBE_EARLY_STOP else tol}
         Vn_w = V[pv] if reorder else V
+        Vt_w = Vr[pv] if reorder else Vr  # round 11x: the tangential ratio's vertices
 
         def run_probe(kw):
             """The probe; round 11s: to the relative stop, then on to 11r's scale-free stop
@@ -172,7 +174,7 @@ def _denoise(V, F, *, lam, th, a, robust_iters, feature_iters, mask_update_every
                                    Vd, Vi, q_edges, th)
 
         r1 = run_probe(kw1)
-        tr = tangential_ratio(Vn_w, Fw, r1.V, topo=topo_w)
+        tr = tangential_ratio(Vt_w, Fw, r1.V, topo=topo_w)
         ns = noise_scale(Vn_w, Fw, reference=r1.V, topo=topo_w)
         if willmore_weight is None:
             ww = willmore_weight_from_scale(ns.rho, impulsive, tr)
@@ -182,7 +184,7 @@ def _denoise(V, F, *, lam, th, a, robust_iters, feature_iters, mask_update_every
             if inner_iters != kw1["inner_iters"]:
                 kw1["inner_iters"] = inner_iters
                 r1 = run_probe(kw1)
-                tr = tangential_ratio(Vn_w, Fw, r1.V, topo=topo_w)
+                tr = tangential_ratio(Vt_w, Fw, r1.V, topo=topo_w)
         r1_V = r1.V[inv] if reorder else r1.V
         cs = getattr(r1, "crease_support", None)  # read by round 11s's gate on these normals
         sup, net = cs if cs is not None else _cn.supported(topo_w, r1.N, th=th)  # without noise
@@ -229,6 +231,11 @@ def _denoise(V, F, *, lam, th, a, robust_iters, feature_iters, mask_update_every
         if kp:  # coarse-to-fine: the whole model runs again on the low-passed input
             log.info("heavy noise on an organic mesh: %d Taubin pairs on the input first", kp)
             Vp = presmooth(V, topo.edges, np.ones(len(V), bool), kp)  # every vertex (10h)
+            from . import layoutkeep as _lk
+
+            Vread = Vp
+            if _lk.LAYOUT_KEEP and _lk.PRESMOOTH_KEEP:  # round 11x: the input's layout back,
+                Vp = _lk.apply(Vp, V, F, topo.edges, info["tangential_ratio"])  # read on Vread
             r = _denoise(Vp, F, lam=lam, th=th, a=a,
                          robust_iters=None if auto_robust else robust_iters,
                          feature_iters=feature_iters, mask_update_every=mask_update_every,
@@ -237,7 +244,7 @@ def _denoise(V, F, *, lam, th, a, robust_iters, feature_iters, mask_update_every
                          inner_iters=None if auto_inner else inner_iters, n_solver=n_solver,
                          stages=None, huber_delta=huber_delta, willmore_weight=None,
                          regions=regions, callback=callback, polish=False,  # 10h: not polished
-                         presmoothed=True)
+                         presmoothed=True, read_from=Vread)
             r.params.update(presmooth_steps=kp, presmooth_noise_estimate=r.noise_estimate,
                             presmooth_network_rejected=info["network_rejected"],
                             presmooth_tangential_ratio=info["tangential_ratio"],
