@@ -17,6 +17,11 @@ run cannot stop before ``k_1`` (every ``rel^k`` there is ``≥ τ_1 > τ_2``, ap
 ``T`` to the same ``s``. :meth:`ADMMSolver.resume` continues from such a state; the restart of
 round 11s (a new solve from the returned vertices) reset ``ρ_1, ρ_2, η``, the normalisation
 and ``j``, and so was not the same run (tests/test_admm_resume.py).
+
+The state is written at the end of each iteration, before the callback, so a run stopped by
+rule (35) or by :class:`~meshrepair.solver.result.StopRequested` resumes exactly; after a
+``KeyboardInterrupt`` inside an iteration the multipliers (updated in place) may be one step
+ahead of ``V``.
 """
 
 from __future__ import annotations
