@@ -54,6 +54,16 @@ if __name__ == "__main__":
         return r
 
     solver.ADMMSolver.solve = timed_solve
+    orig_resume = getattr(solver.ADMMSolver, "resume", None)  # round 11u: a resumed run
+
+    def timed_resume(self, state, **kw):
+        t, k1 = time.perf_counter(), state.k
+        r = orig_resume(self, state, **kw)
+        runs.append((time.perf_counter() - t, r.iterations - k1))
+        return r
+
+    if orig_resume is not None:
+        solver.ADMMSolver.resume = timed_resume
     kw = {} if its == 0 else {"robust_iters": its // 2, "feature_iters": its - its // 2}
     cpu = []
     with threadpool_limits(1):

@@ -186,13 +186,19 @@ def _recording_solver():
                           None if V_init is None else np.array(V_init)))
             return r
 
+        def resume(self, state, *, tol=None, **kw):
+            k1 = state.k
+            r = super().resume(state, tol=tol, **kw)
+            calls.append((tol, self.options.stages[0].max_iter - k1, r.iterations - k1, None))
+            return r
+
     return Rec, calls
 
 
 @pytest.mark.parametrize("shape", ["box", "sphere"])
 def test_gated_probe_phases_tolerances_and_iterations(shape):
-    """Phase 1 stops at the relative tolerance switch_tol; a box (creases) goes on, from phase
-    1's vertices, with the scale-free tolerance for the iterations left; a smooth sphere (no
+    """Phase 1 stops at the relative tolerance switch_tol; a box (creases) goes on, resuming
+    phase 1's run, with the scale-free tolerance for the iterations left; a smooth sphere (no
     crease-supported edge) stops after phase 1. The iterations add up."""
     from meshrepair.denoise_run import default_stages
     from meshrepair.scalefree import gated_probe, probe_tol
@@ -223,8 +229,8 @@ def test_gated_probe_phases_tolerances_and_iterations(shape):
         tol2, max2, it2, Vi2 = calls[1]
         assert tol2 == pytest.approx(st.switch_tol / 4)
         assert max2 == st.max_iter - calls[0][2]
-        assert r.iterations == calls[0][2] + it2
-        assert Vi2 is not None
+        assert r.iterations == calls[0][2] + it2 and it2 > 0
+        assert len(r.history) == r.iterations  # one run: the history goes on
     else:
         assert r.probe_phases == 1 and r.probe_gate_support == 0.0 and len(calls) == 1
         # the gate's read is handed on, equal to reading the result's normals again

@@ -29,7 +29,8 @@ finer mesh, whatever its resolution.
 Round 11s gates it (:func:`gated_probe`): on a mesh with ``q > Q_0`` the probe first stops at
 ``τ``; it goes on to ``τ_eff`` (for the iterations left) only when that probe's
 crease-supported region is not empty, so a fine organic mesh that reads no crease keeps the
-relative stop.
+relative stop. Round 11u: phase 2 resumes phase 1's solver state (multipliers, penalties,
+normalisation, counters), so the two phases are the iterates of round 11r's single probe.
 
 **2. The CAD-part test.** Round 4 calls a mesh a CAD part when the crease-supported region C
 (chains dilated by 2 rings, :func:`meshrepair.regions.crease_support`) covers
@@ -162,26 +163,31 @@ def continue_probe(support: float) -> bool:
 
 
 def gated_probe(solver_cls, options_cls, F, n_vertices, topo, stage, kw, Vd, Vi, q, th):
-    """Round 11s's two-phase probe of a mesh of radius ``q`` (edge lengths).
+    """Round 11s's two-phase probe of a mesh of radius ``q`` (edge lengths); round 11u: phase
+    2 *continues* phase 1's run.
 
-    Phase 1 stops at the relative tolerance ``stage.switch_tol``; when :func:`continue_probe`
-    reads a crease-supported region on its normals, phase 2 restarts the same stage from
-    phase 1's vertices for the iterations left, with rule 1's tolerance ``kw['tol']``
-    (``switch_tol · Q_0 / q``). Returns the last phase's result, its ``iterations`` the sum of
-    both phases, with ``probe_phases`` (1 or 2) and ``probe_gate_support`` (f at phase 1).
-    When phase 2 does not run, the result also carries ``crease_support``, the
+    Phase 1 stops at the relative tolerance ``τ_1 = stage.switch_tol``; when
+    :func:`continue_probe` reads a crease-supported region on its normals, the same solver
+    resumes phase 1's full state (vertices, normals, multipliers ρ_1 ρ_2, penalties, mask,
+    normalisation, inner step, counters: :class:`meshrepair.solver.state.ADMMState`) with rule
+    1's tolerance ``τ_2 = kw['tol']`` (``switch_tol · Q_0 / q``). Since the stop only reads
+    ``rel`` and ``τ_2 < τ_1``, phase 1 + phase 2 are the iterates of one run to ``τ_2``
+    (:mod:`meshrepair.solver.state`): the two phases of a crease-supported mesh give round
+    11r's probe, the others keep the relative stop. Returns the last phase's result, its
+    ``iterations`` the whole run's, with ``probe_phases`` (1 or 2) and ``probe_gate_support``
+    (f at phase 1). When phase 2 does not run, the result also carries ``crease_support``, the
     ``crease_network.supported`` read of its normals, so the caller does not compute it again.
     """
     import logging
-    from dataclasses import replace
 
     from . import crease_network as _cn
 
-    r = solver_cls(F, n_vertices, options=options_cls(
-        stages=(stage,), **{**kw, "tol": float(stage.switch_tol)}), topo=topo).solve(Vd, Vi)
+    solver = solver_cls(F, n_vertices, options=options_cls(
+        stages=(stage,), **{**kw, "tol": float(stage.switch_tol)}), topo=topo)
+    r = solver.solve(Vd, Vi, keep_state=True)
+    state, r.state = r.state, None
     r.probe_phases, r.probe_gate_support = 1, float("nan")
-    left = int(stage.max_iter) - int(r.iterations)
-    if left <= 0 or r.stop_reason == "callback":
+    if r.iterations >= int(stage.max_iter) or r.stop_reason == "callback":
         return r
     r.crease_support = _cn.supported(topo, r.N, th=th)  # phase 1's (support, network)
     f = float(r.crease_support[0].mean())
@@ -190,9 +196,7 @@ def gated_probe(solver_cls, options_cls, F, n_vertices, topo, stage, kw, Vd, Vi,
                                      q, r.iterations, f)
     if not continue_probe(f):
         return r
-    st_b = replace(stage, max_iter=left, min_iter=min(int(stage.min_iter), left))
-    r2 = solver_cls(F, n_vertices, options=options_cls(stages=(st_b,), **kw),
-                    topo=topo).solve(Vd, r.V)
-    r2.iterations += r.iterations
+    del r
+    r2 = solver.resume(state, tol=float(kw["tol"]))
     r2.probe_phases, r2.probe_gate_support = 2, f
     return r2

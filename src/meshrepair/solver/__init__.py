@@ -19,11 +19,15 @@ ends after ``max_iter`` iterations or when the relative change of V falls below 
 
 Modules: :mod:`~meshrepair.solver.options` (:class:`Stage`, :class:`SolverOptions`),
 :mod:`~meshrepair.solver.admm` (:class:`ADMMSolver`: the loop and the masks),
-:mod:`~meshrepair.solver.result` (:class:`SolverResult`, :class:`StopRequested`).
+:mod:`~meshrepair.solver.result` (:class:`SolverResult`, :class:`StopRequested`),
+:mod:`~meshrepair.solver.state` (:class:`ADMMState`: what the loop carries, so that
+:meth:`ADMMSolver.resume` continues a run stopped by rule (35) with a smaller tolerance).
 """
 
 from .admm import ADMMSolver
 from .options import MASK_MODES, SolverOptions, Stage
 from .result import SolverResult, StopRequested
+from .state import ADMMState
 
-__all__ = ["ADMMSolver", "MASK_MODES", "SolverOptions", "SolverResult", "Stage", "StopRequested"]
+__all__ = ["ADMMSolver", "ADMMState", "MASK_MODES", "SolverOptions", "SolverResult", "Stage",
+           "StopRequested"]

@@ -25,6 +25,7 @@ from ..relax import TangentialRelaxer
 from ..topology import Topology, edge_topology
 from .options import SolverOptions
 from .result import SolverResult, StopRequested
+from .state import ADMMState
 
 log = logging.getLogger(__name__)
 
@@ -143,7 +144,8 @@ class ADMMSolver:
     # -- main loop -----------------------------------------------------------------------------
     def solve(self, V0: np.ndarray, V_init: np.ndarray | None = None, *,
               given_mask: np.ndarray | None = None,
-              callback: Callable[[dict], None] | None = None) -> SolverResult:
+              callback: Callable[[dict], None] | None = None,
+              keep_state: bool = False) -> SolverResult:
         """Run the schedule from ``V_init`` (default ``V0``) with data ``V0``.
 
         Parameters
@@ -152,17 +154,43 @@ class ADMMSolver:
         V_init : (nV, 3), optional initial mesh (e.g. with a filled hole).
         given_mask : (nE,) bool, M_E for stages whose mask is ``"given"``.
         callback : called with each history entry; raise :class:`StopRequested` to stop.
+        keep_state : hand the loop's :class:`~meshrepair.solver.state.ADMMState` back as
+            ``result.state``, so that :meth:`resume` can continue the same run.
 
         Returns
         -------
         SolverResult
         """
         with heap_allocations():
-            return self._solve(V0, V_init, given_mask=given_mask, callback=callback)
+            st = self._start(V0, V_init, given_mask)
+            return self._run(st, self.options.tol, callback, keep_state)
 
-    def _solve(self, V0: np.ndarray, V_init: np.ndarray | None, *,
-               given_mask: np.ndarray | None,
-               callback: Callable[[dict], None] | None) -> SolverResult:
+    def resume(self, state: ADMMState, *, tol: float | None = None,
+               callback: Callable[[dict], None] | None = None,
+               keep_state: bool = False) -> SolverResult:
+        """Continue the run whose ``result.state`` is ``state`` (from :meth:`solve` or
+        :meth:`resume` of this solver, with ``keep_state=True``) until rule (35) with ``tol``
+        (default ``options.tol``) or the schedule's ``max_iter``.
+
+        Phase 1 stopped by ``rel < τ_1`` and resumed with ``τ_2 < τ_1`` gives the iterates of
+        one run with ``τ_2`` (:mod:`meshrepair.solver.state`). ``state`` is advanced in place;
+        the result's ``iterations`` and ``history`` count the whole run.
+        """
+        if len(state.V) != self.topo.n_vertices or len(state.N) != self.topo.n_faces:
+            from ..errors import MeshRepairError
+
+            raise MeshRepairError("resume: the state is not of this solver's mesh")
+        t = self.options.tol if tol is None else float(tol)
+        if not (np.isfinite(t) and t > 0):
+            from ..errors import MeshRepairError
+
+            raise MeshRepairError(f"resume: tol must be finite and > 0, got {tol!r}")
+        with heap_allocations():
+            return self._run(state, t, callback, keep_state)
+
+    def _start(self, V0: np.ndarray, V_init: np.ndarray | None,
+               given_mask: np.ndarray | None) -> ADMMState:
+        """The state before the first iteration: normalisation, normals, zero multipliers."""
         o = self.options
         topo = self.topo
         V0 = np.asarray(V0, dtype=np.float64)
@@ -177,35 +205,46 @@ class ADMMSolver:
             raise MeshRepairError("all edges have zero length; the mesh has no extent")
         X0 = np.ascontiguousarray((V0 - center) / scale)
         V = np.ascontiguousarray((Vi - center) / scale)
-        fid = o.lam * self.M_V**2
-        F = self.F
-        fa, fb, E_int, nF = self.fa, self.fb, self.E_int, topo.n_faces
+        N = _k.face_normals(V, self.F)
+        return ADMMState(
+            center=center, scale=scale, X0=X0, fid=o.lam * self.M_V**2, V=V, N=N, Nv=N.copy(),
+            l=_k.edge_lengths(V, self.E_int), rho1=np.zeros((len(self.ie), 3)),
+            rho2=np.zeros((topo.n_faces, 3)),
+            inner=InnerState(step=1.0 if o.precondition else 1e-2, precondition=o.precondition),
+            given_mask=given_mask, sharp=np.zeros(topo.n_edges, bool))
 
-        N = _k.face_normals(V, F)
-        Nv = N.copy()
-        l = _k.edge_lengths(V, E_int)
-        rho1 = np.zeros((len(self.ie), 3))
-        rho2 = np.zeros((topo.n_faces, 3))
-        state = InnerState(step=1.0 if o.precondition else 1e-2, precondition=o.precondition)
-        history: list[dict] = []
-        t_start = time.perf_counter()
-        k = 0
+    def _run(self, s: ADMMState, tol: float, callback: Callable[[dict], None] | None,
+             keep_state: bool) -> SolverResult:
+        o = self.options
+        topo = self.topo
+        F, X0, fid, given_mask = self.F, s.X0, s.fid, s.given_mask
+        fa, fb, E_int, nF = self.fa, self.fb, self.E_int, topo.n_faces
+        V, N, Nv, l, rho1, rho2 = s.V, s.N, s.Nv, s.l, s.rho1, s.rho2
+        state, history = s.inner, s.history
+        t_start = time.perf_counter() - s.elapsed
+        k = s.k
         stop_reason = "max_iter"
-        sharp = np.zeros(topo.n_edges, bool)
+        sharp = s.sharp
+        beta1, beta2 = s.beta1, s.beta2
         try:
-            for si, stage in enumerate(o.stages):
+            while s.stage < len(o.stages):
+                si = s.stage
+                stage = o.stages[si]
                 last = si == len(o.stages) - 1
-                src = N if o.mask_source == "N" else _k.face_normals(V, F)
-                sharp = self._mask(stage.mask, src, given_mask)
+                if not s.begun:
+                    src = N if o.mask_source == "N" else _k.face_normals(V, F)
+                    sharp = self._mask(stage.mask, src, given_mask)
+                    beta1 = stage.beta1 if (sharp.any() or stage.mask == "all") else max(
+                        stage.beta1, stage.eps * 2.0 * o.willmore_weight)
+                    if sharp.any() and beta1 <= stage.a:
+                        beta1 = 1.01 * stage.a
+                    beta2 = stage.beta2_ratio * beta1
+                    s.sharp, s.beta1, s.beta2, s.begun, s.j = sharp, beta1, beta2, True, 0
+                    log.info("stage %s: a=%g beta1=%g beta2=%g sharp edges %d/%d", stage.name,
+                             stage.a, beta1, beta2, int(sharp.sum()), topo.n_edges)
                 sh = sharp[self.ie]  # the mask on interior edges, re-gathered when it changes
-                beta1 = stage.beta1 if (sharp.any() or stage.mask == "all") else max(
-                    stage.beta1, stage.eps * 2.0 * o.willmore_weight)
-                if sharp.any() and beta1 <= stage.a:
-                    beta1 = 1.01 * stage.a
-                beta2 = stage.beta2_ratio * beta1
-                log.info("stage %s: a=%g beta1=%g beta2=%g sharp edges %d/%d", stage.name,
-                         stage.a, beta1, beta2, int(sharp.sum()), topo.n_edges)
-                for j in range(stage.max_iter):
+                done = False  # rule (35) met in the last stage: the run stops in this stage
+                for j in range(s.j, stage.max_iter):
                     if (stage.mask == "adaptive" and o.mask_update_every and j > 0
                             and j % o.mask_update_every == 0):
                         src = N if o.mask_source == "N" else _k.face_normals(V, F)
@@ -277,17 +316,24 @@ class ADMMSolver:
                         "time": time.perf_counter() - t_start,
                     }
                     history.append(entry)
+                    s.V, s.N, s.Nv, s.l, s.sharp, s.k, s.j = V, N, Nv, l, sharp, k, j + 1
+                    s.elapsed = entry["time"]
                     if callback is not None:
                         callback(entry)
                     if j + 1 >= stage.min_iter:
-                        if last and rel < o.tol:
+                        if last and rel < tol:
                             stop_reason = "rule (35)"
+                            done = True
                             break
                         if not last and rel < stage.switch_tol:
                             break
+                if done:
+                    break
+                s.stage, s.begun = si + 1, False  # the stage ended: the next one starts
         except (StopRequested, KeyboardInterrupt) as exc:
             stop_reason = "interrupted" if isinstance(exc, KeyboardInterrupt) else "callback"
             log.warning("solver stopped by %s after %d iterations", stop_reason, k)
+        scale, center = s.scale, s.center
         return SolverResult(
             V=V * scale + center,
             F=self.F.copy(),
@@ -299,6 +345,7 @@ class ADMMSolver:
             iterations=k,
             stop_reason=stop_reason,
             scale=scale,
+            state=s if keep_state else None,
         )
 
     def with_options(self, **changes) -> ADMMSolver:

@@ -26,6 +26,9 @@ class SolverResult:
         n_sharp, time``.
     iterations : int
     stop_reason : str
+    scale : float, the mean edge length of the normalisation.
+    state : ADMMState or None, the loop's state (``keep_state=True``), for
+        :meth:`ADMMSolver.resume`.
     """
 
     V: np.ndarray
@@ -38,6 +41,7 @@ class SolverResult:
     iterations: int = 0
     stop_reason: str = ""
     scale: float = 1.0
+    state: object | None = None
 
 
 class StopRequested(Exception):
