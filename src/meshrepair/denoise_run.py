@@ -220,12 +220,14 @@ def _denoise(V, F, *, lam, th, a, robust_iters, feature_iters, mask_update_every
                  ns.gamma, ww)
 
     if sup_v is not None and willmore_weight is None and lam is None and not presmoothed:
+        from . import coarse_lowpass as _clp
         from .presmooth import presmooth, presmooth_steps  # round 10h: heavy organic noise
 
         kp = presmooth_steps(gamma, info["tangential_ratio"],
                              support_fraction=info["support_fraction"],
                              outside=info["outside_weight"], willmore=ww, impulsive=impulsive,
                              heavy=_cn.heavy_from_network(info["network_rejected"]))
+        kp = _clp.capped_steps(kp, r1_V, F, topo.edges)  # round 11w: at the mesh's resolution
         if kp:  # coarse-to-fine: the whole model runs again on the low-passed input
             log.info("heavy noise on an organic mesh: %d Taubin pairs on the input first", kp)
             Vp = presmooth(V, topo.edges, np.ones(len(V), bool), kp)  # every vertex (10h)
