@@ -71,24 +71,67 @@ def test_cap_is_scale_and_rotation_free(scale):
     assert clp.max_presmooth_steps(q1, MAX_STEPS) == clp.max_presmooth_steps(q0, MAX_STEPS)
 
 
-def test_denoise_caps_the_low_pass_on_a_coarse_sphere(monkeypatch):
-    # heavy noise on a coarse organic mesh: round 10h's low-pass fires, and its length is at
-    # most K_q of the probe's radius; with the cap off it is the noise's length
-    from meshrepair import add_noise, denoise
-
+def _bumpy_sphere(freq=8.0, amp=0.2):
+    """A coarse sphere with relief at its own resolution (curvature roughness above C_0)."""
     V, F = _sphere(3)
-    Vn = add_noise(V, F, 0.6, direction="normal", seed=1)
-    monkeypatch.setattr(clp, "COARSE_CAP", False)
-    k_free = denoise(Vn, F).params["presmooth_steps"]
-    monkeypatch.setattr(clp, "COARSE_CAP", True)
+    return V * (1 + amp * np.cos(freq * V[:, 0]) * np.cos(freq * V[:, 1])
+                * np.cos(freq * V[:, 2]))[:, None], F
+
+
+def _low_pass_read(monkeypatch, Vn, F):
+    """(steps asked by round 10h, K_q, probe roughness, steps taken) of denoise on (Vn, F)."""
+    from meshrepair import denoise
+    from meshrepair.coarse import curvature_roughness
+
     seen = {}
     orig = clp.capped_steps
 
     def spy(k, V_probe, F_, edges):
+        seen["k"] = k
         seen["K"] = clp.max_presmooth_steps(radius_in_edges(V_probe, F_, edges), MAX_STEPS)
+        seen["c"] = curvature_roughness(V_probe, F_, edges)
         return orig(k, V_probe, F_, edges)
 
     monkeypatch.setattr(clp, "capped_steps", spy)
-    k = denoise(Vn, F).params["presmooth_steps"]
-    assert k_free > seen["K"] > 0, (k_free, seen)
-    assert k == seen["K"]
+    taken = denoise(Vn, F).params["presmooth_steps"]
+    monkeypatch.undo()
+    return seen["k"], seen["K"], seen["c"], taken
+
+
+def test_denoise_caps_the_low_pass_where_the_coarse_surface_has_relief(monkeypatch):
+    # heavy noise on a coarse organic mesh: round 10h's low-pass fires; with relief at the
+    # mesh's scale (probe roughness ≥ C_0) its length is K_q, on a plain sphere (no relief) it
+    # is round 10h's, however coarse the mesh
+    from meshrepair import add_noise
+    from meshrepair.coarse import C_0
+
+    V, F = _bumpy_sphere()
+    k, K, c, taken = _low_pass_read(monkeypatch, add_noise(V, F, 0.6, direction="normal",
+                                                           seed=1), F)
+    assert c >= C_0 and k > K > 0 and taken == K, (k, K, c, taken)
+    V, F = _sphere(3)
+    k, K, c, taken = _low_pass_read(monkeypatch, add_noise(V, F, 0.6, direction="normal",
+                                                           seed=1), F)
+    assert c < C_0 and k > K and taken == k, (k, K, c, taken)
+
+
+def test_run_on_the_low_passed_mesh_keeps_the_white_read(monkeypatch):
+    assert clp.keep_white(16.0, capped=True) == 1.0
+    assert clp.keep_white(16.0, capped=False) == 16.0
+    monkeypatch.setattr(clp, "KEEP_WHITE", False)
+    assert clp.keep_white(16.0, capped=True) == 16.0
+
+
+def test_short_low_pass_leaves_noise_that_reads_correlated_but_is_kept_white(monkeypatch):
+    # a coarse noisy sphere low-passed by 2 pairs (the cap shortened round 10h's length): the
+    # run on it reads the filter's left-over as correlated (w > 1) unless the white read is kept
+    from meshrepair import add_noise, denoise
+
+    V, F = _sphere(3)
+    Vn = add_noise(V, F, 0.6, direction="normal", seed=1)
+    monkeypatch.setattr(clp, "capped_steps", lambda k, *a: min(k, 2))
+    assert denoise(Vn, F).params["willmore_weight"] == 1.0
+    monkeypatch.setattr(clp, "KEEP_WHITE", False)
+    p = denoise(Vn, F).params
+    assert p["presmooth_steps"] == 2
+    assert p["willmore_weight"] > 1.0

@@ -36,6 +36,32 @@ finely sampled as the coarsest ×1 design truth (spot, ``q`` 14.7-14.9 on its pr
 capped: ``K_q(14.7) = 107 ≥ 96``, round 10h's own cap (``c_q = 0.43``: 94). ``K_q`` falls
 steeply with ``q``: 42 at q 12.3, 11 at q 9, 4-5 at q 7.1-7.4 (spot ``dec``).
 
+**After a capped low-pass the noise is read as white.** Round 10h's gate asks for white noise
+(Willmore weight 1 on the input). A low-pass shortened by the cap leaves the noise's long
+wavelengths, correlated by the filter, and the run on the low-passed mesh reads them so (probe
+profile ρ 1.7-1.8) and takes the correlated-noise branch (Willmore weight up to 16,
+:func:`meshrepair.denoise_rules.willmore_weight_from_scale`): a prior of ``w`` averages the
+normals over about ``√w`` rings, the length the cap has just refused on this mesh. Measured
+with the crease support forced empty (docs/parameters.md, round 11w): spot ``dec`` γ0.5 normal
+at its ``K_q = 4`` MSAE 378.0 (w 16), 258.5 with w = 1; spot ``dec`` γ0.3 normal at k = 3 304.9
+against 148.0; rocker_arm ``dec`` γ0.3 normal at k = 4 270.1 against 136.3. So the run after a
+low-pass *shortened by the cap* (``K_q`` below round 10h's ``k``) keeps the input's white read,
+
+.. math:: w = 1 \quad\text{when } K_q < k
+
+(:func:`keep_white`). Where the cap does not act the run reads the noise of the low-passed mesh
+as before: there the correlated branch helps (keeping w = 1 on every low-passed run measured
+camelhead ``sub1`` γ0.3 / γ0.5 normal 40.2 / 66.5 → 93.7 / 137.0, spot ``sub2`` γ0.5 normal
+22.0 → 47.1; not taken).
+
+**Where the cap reads.** A surface without relief at the mesh's scale loses nothing to a long
+low-pass, however coarse the mesh: a 642-vertex sphere (q ≈ 5) at γ0.5 normal reads MSAE 20.6
+with ``K_q`` = 3 pairs, 7.3 without any low-pass and less with round 10h's 64. Round 11c's read
+of the curvature variation (:func:`meshrepair.coarse.curvature_roughness`, ``c = ‖h − W²h‖ /
+‖h‖`` after 8 Taubin pairs, here on the probe) says which: the cap acts only where
+``c ≥ c_0 = 0.185``, round 11c's bound of a surface smooth at its resolution (probe reads:
+icospheres 0.10-0.15 at γ0.5-0.6, spot ``dec`` 0.28-0.30, spot ×1 0.20-0.24, nicolo ×1 0.35).
+
 The cap reads lengths only in units of the mesh's own edge length: it is invariant under rigid
 motions and uniform scaling.
 """
@@ -83,9 +109,25 @@ def max_presmooth_steps(q: float, max_steps: int) -> int:
 
 
 def capped_steps(k: int, V_probe: np.ndarray, F: np.ndarray, edges: np.ndarray) -> int:
-    """Round 10h's ``k`` capped at ``K_q``, ``q`` read on the probe's vertices ``V_probe``."""
+    """Round 10h's ``k`` capped at ``K_q``, ``q`` read on the probe's vertices ``V_probe``,
+    when the probe's surface has relief at the mesh's resolution (module docstring:
+    :func:`meshrepair.coarse.curvature_roughness` of the probe ``≥ C_0``; read only when
+    ``K_q < k``)."""
     if k <= 0 or not COARSE_CAP:
         return int(k)
+    from .coarse import C_0, curvature_roughness
     from .scalefree import radius_in_edges
 
-    return int(min(int(k), max_presmooth_steps(radius_in_edges(V_probe, F, edges), int(k))))
+    cap = max_presmooth_steps(radius_in_edges(V_probe, F, edges), int(k))
+    if cap >= k or not curvature_roughness(V_probe, F, edges) >= C_0:
+        return int(k)
+    return int(cap)
+
+
+KEEP_WHITE = True
+
+
+def keep_white(willmore: float, capped: bool) -> float:
+    """The Willmore weight read on the noise's scale, or 1 on the run after a low-pass that
+    the cap shortened (module docstring: the input's white read is kept)."""
+    return 1.0 if (KEEP_WHITE and capped) else float(willmore)
