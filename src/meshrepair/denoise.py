@@ -58,7 +58,8 @@ Round 10h: heavy white noise on an organic mesh (total level ``γ̂ √(1 + 2 mi
 after the probe) is low-passed first: ``round((γ̂ √(1 + min(r_t, 1)²) / 0.044)²)`` (≤ 96)
 Taubin λ|μ pairs on the input, then the whole schedule above runs on the low-passed mesh
 (:mod:`meshrepair.presmooth`; ``params['presmooth_steps']``). The run on the low-passed mesh
-is not polished.
+is not polished. Round 11w: at most ``K_q`` pairs, the most that do not halve a wave of length
+0.44 q (q the probe's radius in edge lengths; :mod:`meshrepair.coarse_lowpass`).
 
 Round 11d: a crease chain of the probe is dropped from C when both the whole network of chains
 and the chain itself branch (β > 0.2) and have rough sides (s > 5.5°): noise, not a CAD crease

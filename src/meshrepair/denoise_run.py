@@ -12,6 +12,7 @@ from dataclasses import replace
 
 import numpy as np
 
+from . import coarse_lowpass as _clp
 from . import crease_network as _cn
 from . import scalefree as _sf
 from .denoise_finish import (
@@ -77,7 +78,8 @@ def default_stages(*, robust_iters: int = 40, feature_iters: int = 60, a: float 
 def _denoise(V, F, *, lam, th, a, robust_iters, feature_iters, mask_update_every,
              min_feature_edges, tol, unfold, inner_solver, inner_iters, n_solver, stages,
              huber_delta, willmore_weight, regions, callback, polish=True,
-             presmoothed: bool = False, read_from: np.ndarray | None = None) -> DenoiseResult:
+             presmoothed: bool = False, read_from: np.ndarray | None = None,
+             capped: bool = False) -> DenoiseResult:
     from .options import check_bool, check_int, check_number
     from .validate import _check_mesh
 
@@ -177,7 +179,7 @@ def _denoise(V, F, *, lam, th, a, robust_iters, feature_iters, mask_update_every
         tr = tangential_ratio(Vt_w, Fw, r1.V, topo=topo_w)
         ns = noise_scale(Vn_w, Fw, reference=r1.V, topo=topo_w)
         if willmore_weight is None:
-            ww = willmore_weight_from_scale(ns.rho, impulsive, tr)
+            ww = _clp.keep_white(willmore_weight_from_scale(ns.rho, impulsive, tr), capped)
         if auto_inner and ww > 1.0:  # correlated noise: more V-steps for its long waves,
             inner_iters = inner_iters_from_scale(ns.length)  # in the probe too (its creases)
             opts_kw["inner_iters"] = inner_iters
@@ -228,6 +230,7 @@ def _denoise(V, F, *, lam, th, a, robust_iters, feature_iters, mask_update_every
                              support_fraction=info["support_fraction"],
                              outside=info["outside_weight"], willmore=ww, impulsive=impulsive,
                              heavy=_cn.heavy_from_network(info["network_rejected"]))
+        kp0, kp = kp, _clp.capped_steps(kp, r1_V, F, topo.edges)  # round 11w: the resolution
         if kp:  # coarse-to-fine: the whole model runs again on the low-passed input
             log.info("heavy noise on an organic mesh: %d Taubin pairs on the input first", kp)
             Vp = presmooth(V, topo.edges, np.ones(len(V), bool), kp)  # every vertex (10h)
@@ -244,7 +247,7 @@ def _denoise(V, F, *, lam, th, a, robust_iters, feature_iters, mask_update_every
                          inner_iters=None if auto_inner else inner_iters, n_solver=n_solver,
                          stages=None, huber_delta=huber_delta, willmore_weight=None,
                          regions=regions, callback=callback, polish=False,  # 10h: not polished
-                         presmoothed=True, read_from=Vread)
+                         presmoothed=True, read_from=Vread, capped=kp < kp0)
             r.params.update(presmooth_steps=kp, presmooth_noise_estimate=r.noise_estimate,
                             presmooth_network_rejected=info["network_rejected"],
                             presmooth_tangential_ratio=info["tangential_ratio"],
