@@ -220,15 +220,17 @@ def _denoise(V, F, *, lam, th, a, robust_iters, feature_iters, mask_update_every
                  ns.gamma, ww)
 
     if sup_v is not None and willmore_weight is None and lam is None and not presmoothed:
-        from .presmooth import presmooth, presmooth_steps  # round 10h: heavy organic noise
+        from .presmooth import presmooth_steps  # round 10h: heavy organic noise
 
         kp = presmooth_steps(gamma, info["tangential_ratio"],
                              support_fraction=info["support_fraction"],
                              outside=info["outside_weight"], willmore=ww, impulsive=impulsive,
                              heavy=_cn.heavy_from_network(info["network_rejected"]))
         if kp:  # coarse-to-fine: the whole model runs again on the low-passed input
+            from .heavylength import heavy_length  # round 11t: the length reads relief
+
+            kp, Vp, hc, hw = heavy_length(V, F, topo.edges, gamma, info["tangential_ratio"], kp)
             log.info("heavy noise on an organic mesh: %d Taubin pairs on the input first", kp)
-            Vp = presmooth(V, topo.edges, np.ones(len(V), bool), kp)  # every vertex (10h)
             r = _denoise(Vp, F, lam=lam, th=th, a=a,
                          robust_iters=None if auto_robust else robust_iters,
                          feature_iters=feature_iters, mask_update_every=mask_update_every,
@@ -239,6 +241,7 @@ def _denoise(V, F, *, lam, th, a, robust_iters, feature_iters, mask_update_every
                          regions=regions, callback=callback, polish=False,  # 10h: not polished
                          presmoothed=True)
             r.params.update(presmooth_steps=kp, presmooth_noise_estimate=r.noise_estimate,
+                            presmooth_roughness=hc, presmooth_tangential_weight=hw,
                             presmooth_network_rejected=info["network_rejected"],
                             presmooth_tangential_ratio=info["tangential_ratio"],
                             presmooth_noise_rho=info["noise_rho"],
