@@ -61,8 +61,9 @@ def test_resolved_sphere_keeps_the_length_relief_shortens_it():
     """On a uniformly sampled sphere the read is near 0 (h constant), so w = 1 and the low-pass is
     round 10h's T^k V exactly; on the same sphere with relief at the mesh's own scale the read is
     above c_1, w = 0 and the low-passed input is T^{k'} V with k' = (γ̂/γ_r)² (random-direction
-    noise: r_t = 1)."""
-    g, r, k = 0.2, 1.0, 4  # k small so that the relief survives into the read
+    noise: r_t = 1; a small γ̂ = 0.07, since the input here carries no noise for the correction
+    of the read to take out)."""
+    g, r, k = 0.07, 1.0, 4  # k small so that the relief survives into the read
     V, F, E = _sphere()
     k1, Vp, c, w = hl.heavy_length(V, F, E, g, r, k)
     assert c < hl.C_0 and w == 1.0 and k1 == k
@@ -74,13 +75,61 @@ def test_resolved_sphere_keeps_the_length_relief_shortens_it():
     assert np.array_equal(Vq, ps.presmooth(Vb, E, np.ones(len(V), bool), k2))
 
 
+def test_relief_read_takes_out_the_filtered_noise():
+    """c̃ with γ̂ = 0 is round 11c's c on T^k V (no correction). With γ̂ > 0 the energy of a white
+    field of level γ̂ ℓ̄ through the same k pairs is taken out of both norms: brute force with
+    dense matrices; on a noisy sphere the corrected read is below the plain one and nearer the
+    clean sphere's (the residual noise is what makes the plain read high)."""
+    V, F, E = _sphere()
+    ell = float(np.linalg.norm(V[E[:, 0]] - V[E[:, 1]], axis=1).mean())
+    Vn = add_noise(V, F, 0.5, direction="normal", seed=2)
+    k = 20
+    X = ps.presmooth(Vn, E, np.ones(len(V), bool), k)
+    assert hl.relief_read(X, F, E, 0.0, ell, k) == pytest.approx(
+        curvature_roughness(X, F, E, steps=0), rel=1e-12)
+    # brute force of the correction
+    n = len(V)
+    A = np.zeros((n, n))
+    A[E[:, 0], E[:, 1]] = A[E[:, 1], E[:, 0]] = 1.0
+    W = A / A.sum(axis=1, keepdims=True)
+    B = np.eye(n) - W @ W
+    T = (np.eye(n) + ps_mu() * (W - np.eye(n))) @ (np.eye(n) + ps_lam() * (W - np.eye(n)))
+    g = 0.3
+    e = np.random.default_rng(hl.NOISE_SEED).standard_normal(n) * (g * ell)
+    e = np.linalg.matrix_power(T, k) @ e
+    from meshrepair.geometry import vertex_normals
+
+    h = np.sum((B @ X) * vertex_normals(X, F), axis=1)
+    r, he = B @ h, B @ e
+    re_ = B @ he
+    want = np.sqrt(max(r @ r - re_ @ re_, 0) / (h @ h - he @ he))
+    got = hl.relief_read(X, F, E, g, ell, k)
+    assert got == pytest.approx(want, rel=1e-9)
+    clean = curvature_roughness(ps.presmooth(V, E, np.ones(n, bool), k), F, E, steps=0)
+    plain = curvature_roughness(X, F, E, steps=0)
+    assert abs(got - clean) < abs(plain - clean) and got < plain
+
+
+def ps_lam():
+    from meshrepair.lowpass import TAUBIN_LAM
+
+    return TAUBIN_LAM
+
+
+def ps_mu():
+    from meshrepair.lowpass import TAUBIN_MU
+
+    return TAUBIN_MU
+
+
 def test_read_is_invariant_to_similarity():
-    """c (and so k') does not change under scaling, rotation and translation of the mesh."""
+    """c̃ (and so k') does not change under scaling, rotation and translation of the mesh."""
     Vb, F, E = _sphere(bumps=0.03)
     R = trimesh.transformations.rotation_matrix(0.7, [1, 2, 3])[:3, :3]
     Vt = 5.0 * Vb @ R.T + np.array([3.0, -1.0, 2.0])
-    c1 = curvature_roughness(ps.presmooth(Vb, E, np.ones(len(Vb), bool), 4), F, E, steps=0)
-    c2 = curvature_roughness(ps.presmooth(Vt, E, np.ones(len(Vt), bool), 4), F, E, steps=0)
+    ell = float(np.linalg.norm(Vb[E[:, 0]] - Vb[E[:, 1]], axis=1).mean())
+    c1 = hl.relief_read(ps.presmooth(Vb, E, np.ones(len(Vb), bool), 4), F, E, 0.2, ell, 4)
+    c2 = hl.relief_read(ps.presmooth(Vt, E, np.ones(len(Vt), bool), 4), F, E, 0.2, 5 * ell, 4)
     assert c1 == pytest.approx(c2, rel=1e-9)
     assert hl.heavy_length(Vb, F, E, 0.2, 1.0, 30)[0] == hl.heavy_length(Vt, F, E, 0.2, 1.0,
                                                                           30)[0]
