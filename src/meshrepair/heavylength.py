@@ -14,7 +14,7 @@ operator's, is close to the truth's, so the tangential part of the noise is nois
 removes and lengthens it (spot γ0.5 random wants k ≈ 40). On a surface that carries relief at
 the mesh's own scale (nicolo) that layout is *not* the truth's: the tangential pull of the
 longer filter flattens the relief instead, and the same γ̂ and r_t want k ≈ 12-21 (nicolo γ0.5
-random: 88.4 at k = 41, 84.7 at k = 21; docs/parameters.md, round 11t).
+random: 88.4 at k = 41, 84.5 at k = 16; docs/parameters.md, round 11t).
 
 **The read** is round 11c's (:func:`meshrepair.coarse.curvature_roughness`) taken on the
 low-passed input itself, ``X = T^k V`` with the length above (the filter's own length, ∝ γ²,
@@ -52,7 +52,7 @@ the same level, since its normal part rounds that relief too):
           {(γ_r + w\\,(γ_p - γ_r))^2}\\Bigr),\\ 0,\\ K_{max}\\Bigr),
           \\qquad γ_p = 0.044,\\ γ_r = 0.05,
 
-so ``w = 1`` (``c ≤ c_0``, or a NaN read) is round 10h's ``k`` exactly, and ``w = 0`` sets the
+so ``w = 1`` (``c̃ ≤ c_0``, or a NaN read) is round 10h's ``k`` exactly, and ``w = 0`` sets the
 length by the normal part of the noise alone at the constant γ_r (``k' = (γ̂/γ_r)²``: ≈ 0.4 k
 for random directions, ≈ 0.75 k for noise along the normals, whose ``r_t`` is 0.1-0.3). ``k' ≤
 k`` always (both factors shrink with ``w``), and the low-passed input is ``T^{k'} V``.
