@@ -224,7 +224,7 @@ def _denoise(V, F, *, lam, th, a, robust_iters, feature_iters, mask_update_every
                  ns.gamma, ww)
 
     if sup_v is not None and willmore_weight is None and lam is None and not presmoothed:
-        from .presmooth import presmooth, presmooth_steps  # round 10h: heavy organic noise
+        from .presmooth import presmooth_steps  # round 10h: heavy organic noise
 
         kp = presmooth_steps(gamma, info["tangential_ratio"],
                              support_fraction=info["support_fraction"],
@@ -232,8 +232,11 @@ def _denoise(V, F, *, lam, th, a, robust_iters, feature_iters, mask_update_every
                              heavy=_cn.heavy_from_network(info["network_rejected"]))
         kp0, kp = kp, _clp.capped_steps(kp, r1_V, F, topo.edges)  # round 11w: the resolution
         if kp:  # coarse-to-fine: the whole model runs again on the low-passed input
+            from .heavylength import heavy_length  # round 11t: the length reads relief
+
+            kc = kp  # the cap's length (round 11w); 11t may shorten it further
+            kp, Vp, hc, hw = heavy_length(V, F, topo.edges, gamma, info["tangential_ratio"], kp)
             log.info("heavy noise on an organic mesh: %d Taubin pairs on the input first", kp)
-            Vp = presmooth(V, topo.edges, np.ones(len(V), bool), kp)  # every vertex (10h)
             from . import layoutkeep as _lk
 
             Vread = Vp
@@ -247,8 +250,9 @@ def _denoise(V, F, *, lam, th, a, robust_iters, feature_iters, mask_update_every
                          inner_iters=None if auto_inner else inner_iters, n_solver=n_solver,
                          stages=None, huber_delta=huber_delta, willmore_weight=None,
                          regions=regions, callback=callback, polish=False,  # 10h: not polished
-                         presmoothed=True, read_from=Vread, capped=kp < kp0)
+                         presmoothed=True, read_from=Vread, capped=kc < kp0)
             r.params.update(presmooth_steps=kp, presmooth_noise_estimate=r.noise_estimate,
+                            presmooth_roughness=hc, presmooth_tangential_weight=hw,
                             presmooth_network_rejected=info["network_rejected"],
                             presmooth_tangential_ratio=info["tangential_ratio"],
                             presmooth_noise_rho=info["noise_rho"],
