@@ -76,6 +76,7 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.spatial import cKDTree
 
+from ._kernels.closest import _np_closest_points_local  # noqa: F401  (the twin, re-exported)
 from .topology import Topology
 
 
@@ -176,50 +177,6 @@ def closest_points_local(V: np.ndarray, F: np.ndarray, P: np.ndarray, *,
         if out is not None:
             return out
     return _np_closest_points_local(V, F, P, rings=rings, chunk=chunk, search=search)
-
-
-def _np_closest_points_local(V: np.ndarray, F: np.ndarray, P: np.ndarray, *, rings: int = 1,
-                             chunk: int = 200_000,
-                             search: tuple[sp.csr_matrix, cKDTree] | None = None) -> np.ndarray:
-    """The numpy twin of :func:`closest_points_local` (batches of ``chunk`` vertices)."""
-    V = np.asarray(V, dtype=np.float64)
-    P = np.asarray(P, dtype=np.float64)
-    F = np.asarray(F, dtype=np.int64)
-    nV = len(V)
-    VF, tree = local_search(V, F) if search is None else search
-    if rings > 1:
-        A = (VF @ VF.T).astype(bool).astype(np.int8)
-        R = sp.identity(nV, dtype=np.int8, format="csr")
-        for _ in range(rings - 1):
-            R = ((R @ A) > 0).astype(np.int8)
-        VF = ((R @ VF) > 0).astype(np.int8).tocsr()
-    near = tree.query(P)[1]
-    out = P.copy()
-    for s in range(0, nV, chunk):
-        idx = np.arange(s, min(nV, s + chunk))
-        C1 = VF[idx]
-        C2 = VF[near[idx]]
-        Cm = (C1 + C2).tocsr()  # candidate faces per row, rows in order
-        counts = np.diff(Cm.indptr)
-        f = Cm.indices.astype(np.int64)
-        if len(f) == 0:
-            continue
-        q = np.repeat(np.arange(len(idx)), counts)
-        gi = idx[q]
-        X = closest_point_triangles(P[gi], V[F[f, 0]], V[F[f, 1]], V[F[f, 2]])
-        R = X - P[gi]
-        d = np.einsum("ij,ij->i", R, R)
-        rows = np.flatnonzero(counts)
-        dmin = np.minimum.reduceat(d, Cm.indptr[rows])
-        full = np.empty(len(idx))
-        full[rows] = dmin
-        hit = np.flatnonzero(d == full[q])
-        first = np.r_[True, q[hit][1:] != q[hit][:-1]]  # q is sorted: first minimiser per row
-        sel = hit[first]
-        out[idx[q[sel]]] = X[sel]
-    has = np.asarray(VF.sum(axis=1)).ravel() > 0
-    out[~has] = V[~has]  # isolated vertices have no surface to project on
-    return out
 
 
 REANCHOR_KAPPA = 0.3

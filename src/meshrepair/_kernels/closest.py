@@ -6,9 +6,13 @@ vertex ``near[i]`` (ascending face index, as the rows of the sparse sum in the n
 gets Ericson's exact point-triangle closest point (*Real-Time Collision Detection*, 5.1.5) with
 the same operations, in the same order, as
 :func:`meshrepair.reproject.closest_point_triangles`, and the first face of least squared
-distance wins. Strict IEEE arithmetic (no fast-math), so the result equals the numpy twin's
-bit for bit (tests/test_kernels_closest.py); it replaces ~10 candidate rows of temporaries per
-vertex by scalars (1.18M vertices: ~2.5 s → ~0.2 s per call).
+distance wins. Strict IEEE arithmetic (no fast-math), the three-term dot products summed as
+numpy's ``einsum`` sums them on this machine (``(x0 y0 + x2 y2) + x1 y1``, as
+``_kernels/fidelity.py`` does), so the result equals the numpy twin's bit for bit there (the
+1.18M-vertex run of docs/performance.md, round 11v) and to rounding elsewhere
+(tests/test_kernels_weighted.py). It replaces ~10 candidate rows of temporaries per vertex by
+scalars: at 1.18M vertices one ``closest_points_local`` call took 3.36 s of CPU with the numpy
+loop and 1.33 s with this pass (of which 0.32 s the pass, the rest the k-d tree query).
 """
 
 from __future__ import annotations
@@ -125,3 +129,52 @@ def closest_points_one_ring(V: np.ndarray, F: np.ndarray, P: np.ndarray, indptr:
         np.ascontiguousarray(V, dtype=np.float64), np.ascontiguousarray(F, dtype=np.int64),
         np.ascontiguousarray(P, dtype=np.float64), np.asarray(indptr, dtype=np.int64),
         np.asarray(indices, dtype=np.int64), np.asarray(near, dtype=np.int64))
+
+
+def _np_closest_points_local(V: np.ndarray, F: np.ndarray, P: np.ndarray, *, rings: int = 1,
+                             chunk: int = 200_000,
+                             search: tuple | None = None) -> np.ndarray:
+    """The numpy twin of :func:`meshrepair.reproject.closest_points_local` (batches of
+    ``chunk`` vertices; any ``rings``)."""
+    import scipy.sparse as sp
+
+    from ..reproject import closest_point_triangles, local_search
+
+    V = np.asarray(V, dtype=np.float64)
+    P = np.asarray(P, dtype=np.float64)
+    F = np.asarray(F, dtype=np.int64)
+    nV = len(V)
+    VF, tree = local_search(V, F) if search is None else search
+    if rings > 1:
+        A = (VF @ VF.T).astype(bool).astype(np.int8)
+        R = sp.identity(nV, dtype=np.int8, format="csr")
+        for _ in range(rings - 1):
+            R = ((R @ A) > 0).astype(np.int8)
+        VF = ((R @ VF) > 0).astype(np.int8).tocsr()
+    near = tree.query(P)[1]
+    out = P.copy()
+    for s in range(0, nV, chunk):
+        idx = np.arange(s, min(nV, s + chunk))
+        C1 = VF[idx]
+        C2 = VF[near[idx]]
+        Cm = (C1 + C2).tocsr()  # candidate faces per row, rows in order
+        counts = np.diff(Cm.indptr)
+        f = Cm.indices.astype(np.int64)
+        if len(f) == 0:
+            continue
+        q = np.repeat(np.arange(len(idx)), counts)
+        gi = idx[q]
+        X = closest_point_triangles(P[gi], V[F[f, 0]], V[F[f, 1]], V[F[f, 2]])
+        R = X - P[gi]
+        d = np.einsum("ij,ij->i", R, R)
+        rows = np.flatnonzero(counts)
+        dmin = np.minimum.reduceat(d, Cm.indptr[rows])
+        full = np.empty(len(idx))
+        full[rows] = dmin
+        hit = np.flatnonzero(d == full[q])
+        first = np.r_[True, q[hit][1:] != q[hit][:-1]]  # q is sorted: first minimiser per row
+        sel = hit[first]
+        out[idx[q[sel]]] = X[sel]
+    has = np.asarray(VF.sum(axis=1)).ravel() > 0
+    out[~has] = V[~has]  # isolated vertices have no surface to project on
+    return out
