@@ -92,7 +92,7 @@ def cad_finish_rule(gamma: float, outside: float, willmore: float) -> int:
 
 
 def crease_side_gate(V: np.ndarray, F: np.ndarray, sharp: np.ndarray, topo, *,
-                     tau: float = CAD_TAU, K=None) -> np.ndarray:
+                     tau: float = CAD_TAU, K=None, N: np.ndarray | None = None) -> np.ndarray:
     """The gate ``G`` of the module docstring (``(nF,)`` bool).
 
     Parameters
@@ -103,6 +103,7 @@ def crease_side_gate(V: np.ndarray, F: np.ndarray, sharp: np.ndarray, topo, *,
     topo : Topology of the mesh
     tau : flatness threshold τ (degrees) for the faces touching a vertex of ``M_E``
     K : the neighbourhood ``K`` (CSR) if already built
+    N : (nF, 3) the unit face normals of ``V`` (``polish._normals_areas``) if already computed
     """
     F = np.asarray(F, dtype=np.int64)
     sharp = np.asarray(sharp, bool)
@@ -113,20 +114,24 @@ def crease_side_gate(V: np.ndarray, F: np.ndarray, sharp: np.ndarray, topo, *,
         return np.ones(len(F), bool)
     if K is None:
         K = _neighbourhood_csr(topo, sharp, 1)
-    N, _, _ = _normals_areas(np.asarray(V, dtype=np.float64), F)
+    if N is None:
+        N, _, _ = _normals_areas(np.asarray(V, dtype=np.float64), F)
     return ~touch | flat_gate_csr(N, K, tau)
 
 
 def finish_targets(X: np.ndarray, F: np.ndarray, K, gate: np.ndarray, *, sigma_c: float,
-                   sigma_s: float = CAD_SIGMA_S, sigma_s_curved: float = CAD_SIGMA_S_CURVED
-                   ) -> np.ndarray:
+                   sigma_s: float = CAD_SIGMA_S, sigma_s_curved: float = CAD_SIGMA_S_CURVED,
+                   faces: tuple | None = None) -> np.ndarray:
     """The target normals ``n'`` of one pass (module docstring): the bilateral filter over the
     CSR neighbourhood ``K`` with range width ``σ_s`` on ``gate`` and ``σ_s'`` off it (faces
-    off the gate keep their normals when ``σ_s' = 0``); ``(nF, 3)``, unit rows."""
-    Nt = filter_normals(X, F, K, gate, sigma_c=sigma_c, sigma_s=sigma_s)
+    off the gate keep their normals when ``σ_s' = 0``); ``(nF, 3)``, unit rows. ``faces``:
+    ``_normals_areas(X, F)`` if already computed (both filters read the same)."""
+    faces = _normals_areas(X, F) if faces is None else faces
+    Nt = filter_normals(X, F, K, gate, sigma_c=sigma_c, sigma_s=sigma_s, faces=faces)
     off = ~np.asarray(gate, bool)
     if sigma_s_curved > 0 and off.any():
-        Nc = filter_normals(X, F, K, off, sigma_c=sigma_c, sigma_s=sigma_s_curved)
+        Nc = filter_normals(X, F, K, off, sigma_c=sigma_c, sigma_s=sigma_s_curved,
+                            faces=faces)
         Nt[off] = Nc[off]
     return Nt
 
@@ -160,10 +165,11 @@ def cad_finish(V: np.ndarray, F: np.ndarray, sharp: np.ndarray, topo, *, passes:
         return X, 0.0
     sharp = np.asarray(sharp, bool)
     K = _neighbourhood_csr(topo, sharp, 1)
-    gate = crease_side_gate(X, F, sharp, topo, tau=tau, K=K)
+    faces = _normals_areas(X, F)  # of the first pass's X: the gate reads the same normals
+    gate = crease_side_gate(X, F, sharp, topo, tau=tau, K=K, N=faces[0])
     le = float(np.linalg.norm(X[topo.edges[:, 0]] - X[topo.edges[:, 1]], axis=1).mean())
-    for _ in range(int(passes)):
+    for p in range(int(passes)):
         Nt = finish_targets(X, F, K, gate, sigma_c=le, sigma_s=sigma_s,
-                            sigma_s_curved=sigma_s_curved)
+                            sigma_s_curved=sigma_s_curved, faces=faces if p == 0 else None)
         X = vertex_update(X, F, Nt, steps)
     return X, float(gate.mean())

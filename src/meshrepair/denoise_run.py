@@ -289,7 +289,8 @@ def _denoise(V, F, *, lam, th, a, robust_iters, feature_iters, mask_update_every
 
     if wedges is not None and _dq.applies(gamma, gamma_rms) and res.stop_reason != "interrupted":
         # the discrepancy principle on w_out (round 9s): lower it where it smooths away signal
-        q = _dq.discrepancy_ratio(V, V_out, F, sup_v, clip=_dq.CLIP * gamma)
+        q = _dq.discrepancy_ratio(V, V_out, F, sup_v, clip=_dq.CLIP * gamma,
+                                       edges=topo.edges)
         info["discrepancy_ratio"] = q
         for w_try in _dq.FALLBACK_WEIGHTS:
             if _dq.accept_weight(q):
@@ -297,7 +298,8 @@ def _denoise(V, F, *, lam, th, a, robust_iters, feature_iters, mask_update_every
             wedges = np.where(force < 0, ww, ww * w_try) if w_try != 1.0 else None
             info["outside_weight"] = w_try
             res, V_out, M_E = solve(stages)
-            q = _dq.discrepancy_ratio(V, V_out, F, sup_v, clip=_dq.CLIP * gamma)
+            q = _dq.discrepancy_ratio(V, V_out, F, sup_v, clip=_dq.CLIP * gamma,
+                                       edges=topo.edges)
             log.info("outside weight lowered to %g (discrepancy ratio %.3f)", w_try, q)
     shrink = _volume_ratio(V, V_out, F, report)
     if shrink is not None and shrink < COLLAPSE_VOLUME_RATIO and res.stop_reason != "interrupted":

@@ -30,7 +30,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .geometry import mean_edge_length, vertex_normals
+from .geometry import edge_lengths, mean_edge_length, vertex_normals
 
 DISCREPANCY = True
 DISCREPANCY_TOL = 0.03
@@ -44,26 +44,31 @@ FALLBACK_WEIGHTS = (3.0,)
 ratio)."""
 
 
-def normal_residuals(V0: np.ndarray, V: np.ndarray, F: np.ndarray) -> np.ndarray:
+def normal_residuals(V0: np.ndarray, V: np.ndarray, F: np.ndarray,
+                     edges: np.ndarray | None = None) -> np.ndarray:
     """Per vertex, ``((V⁰_i - V_i) · n_i)²`` in squared mean edge lengths of ``V⁰``, with
-    ``n_i`` the area-weighted vertex normals of ``V``; shape ``(nV,)``."""
+    ``n_i`` the area-weighted vertex normals of ``V``; shape ``(nV,)``. ``edges``: the unique
+    edges of ``F`` in lexicographic order (``Topology.edges``) when known (no sort then)."""
     V0 = np.asarray(V0, dtype=np.float64)
     V = np.asarray(V, dtype=np.float64)
-    el = mean_edge_length(V0, F)
+    el = (mean_edge_length(V0, F) if edges is None
+          else float(edge_lengths(V0, np.asarray(edges)).mean()))
     d = np.einsum("ij,ij->i", V0 - V, vertex_normals(V, F)) / max(el, 1e-300)
     return d * d
 
 
 def discrepancy_ratio(V0: np.ndarray, V: np.ndarray, F: np.ndarray,
-                      inside: np.ndarray, clip: float | None = None) -> float:
+                      inside: np.ndarray, clip: float | None = None,
+                      edges: np.ndarray | None = None) -> float:
     """``q = r_out / r_in`` of the module docstring: the mean normal residual of the vertices
     outside ``inside`` (a boolean mask, the crease-supported region C) over that of the
     vertices in it, each squared residual capped at ``clip²`` (mean edge lengths; ``None``: no
-    cap). NaN when either region is empty or the residual in C is zero."""
+    cap; ``edges`` as in :func:`normal_residuals`). NaN when either region is empty or the
+    residual in C is zero."""
     inside = np.asarray(inside, dtype=bool)
     if inside.all() or not inside.any():
         return float("nan")
-    r = normal_residuals(V0, V, F)
+    r = normal_residuals(V0, V, F, edges)
     if clip is not None:
         r = np.minimum(r, float(clip) ** 2)
     r_in = float(r[inside].mean())

@@ -48,9 +48,23 @@ def edge_lengths(V: np.ndarray, edges: np.ndarray) -> np.ndarray:
 def mean_edge_length(V: np.ndarray, F: np.ndarray) -> float:
     """Mean length of the unique edges of the mesh (the paper's :math:`\\bar l`)."""
     F = np.asarray(F, dtype=np.int64)
-    he = np.sort(np.concatenate([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]]), axis=1)
-    e = np.unique(he, axis=0)
-    return float(edge_lengths(np.asarray(V, dtype=np.float64), e).mean())
+    return float(edge_lengths(np.asarray(V, dtype=np.float64), unique_edges(F)).mean())
+
+
+def unique_edges(F: np.ndarray) -> np.ndarray:
+    """The unique undirected edges of the faces, ``(nE, 2)`` int64 with ``e[:, 0] < e[:, 1]``,
+    in lexicographic order (the rows of ``np.unique(sorted half-edges, axis=0)``, which is also
+    the order of :attr:`meshrepair.topology.Topology.edges`). One sort of int64 keys
+    ``lo · n + hi`` instead of a row-wise unique (~10x faster at 1M vertices, same rows)."""
+    F = np.asarray(F, dtype=np.int64)
+    if F.size == 0:
+        return np.zeros((0, 2), np.int64)
+    a = np.concatenate([F[:, 0], F[:, 1], F[:, 2]])
+    b = np.concatenate([F[:, 1], F[:, 2], F[:, 0]])
+    lo, hi = np.minimum(a, b), np.maximum(a, b)
+    n = np.int64(int(hi.max()) + 1)
+    key = np.unique(lo * n + hi)
+    return np.stack([key // n, key % n], axis=1)
 
 
 def dihedral_angles(N: np.ndarray, topo: Topology, *, degrees: bool = True) -> np.ndarray:

@@ -119,12 +119,14 @@ def flat_gate_csr(N: np.ndarray, K: sp.csr_matrix, tau: float) -> np.ndarray:
 
 
 def filter_normals(X: np.ndarray, F: np.ndarray, K: sp.csr_matrix, gate: np.ndarray, *,
-                   sigma_c: float, sigma_s: float = POLISH_SIGMA_S) -> np.ndarray:
+                   sigma_c: float, sigma_s: float = POLISH_SIGMA_S,
+                   faces: tuple | None = None) -> np.ndarray:
     """One bilateral pass ``n'`` of the module docstring over the neighbourhood ``K`` (CSR,
-    from :func:`_neighbourhood_csr`); faces outside ``gate`` keep their normals."""
+    from :func:`_neighbourhood_csr`); faces outside ``gate`` keep their normals. ``faces``:
+    ``_normals_areas(X, F)`` when already computed (several passes on the same ``X``)."""
     from ._kernels.bilateral import bilateral_pass
 
-    N, area, C = _normals_areas(X, F)
+    N, area, C = _normals_areas(X, F) if faces is None else faces
     return bilateral_pass(K.indptr, K.indices, N, area, C, gate, sigma_c, sigma_s)
 
 

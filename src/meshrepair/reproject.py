@@ -76,6 +76,7 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.spatial import cKDTree
 
+from ._kernels.closest import _np_closest_points_local  # noqa: F401  (the twin, re-exported)
 from .topology import Topology
 
 
@@ -133,8 +134,19 @@ def _vertex_faces(F: np.ndarray, n_vertices: int) -> sp.csr_matrix:
                           (F.ravel(), np.repeat(np.arange(nF), 3))), shape=(n_vertices, nF))
 
 
+def local_search(V: np.ndarray, F: np.ndarray) -> tuple[sp.csr_matrix, cKDTree]:
+    """What :func:`closest_points_local` builds on the surface ``(V, F)``: the vertex-face
+    incidence (ascending faces per row) and the k-d tree of ``V``; pass it as ``search`` to
+    several calls on the same surface."""
+    V = np.asarray(V, dtype=np.float64)
+    VF = _vertex_faces(np.asarray(F, dtype=np.int64), len(V))
+    VF.sort_indices()
+    return VF, cKDTree(V)
+
+
 def closest_points_local(V: np.ndarray, F: np.ndarray, P: np.ndarray, *,
-                         rings: int = 1, chunk: int = 200_000) -> np.ndarray:
+                         rings: int = 1, chunk: int = 200_000,
+                         search: tuple[sp.csr_matrix, cKDTree] | None = None) -> np.ndarray:
     """Closest point of each ``P[i]`` on the mesh ``(V, F)`` among the faces near vertex i.
 
     Candidates of ``P[i]``: the faces of the ``rings``-ring of vertex i and of the vertex of V
@@ -148,6 +160,7 @@ def closest_points_local(V: np.ndarray, F: np.ndarray, P: np.ndarray, *,
     P : (nV, 3) float64, one query point per vertex
     rings : vertex rings of the candidate faces (≥ 1)
     chunk : vertices per batch (memory bound)
+    search : :func:`local_search` of ``(V, F)``, optional (built when omitted)
 
     Returns
     -------
@@ -156,41 +169,14 @@ def closest_points_local(V: np.ndarray, F: np.ndarray, P: np.ndarray, *,
     V = np.asarray(V, dtype=np.float64)
     P = np.asarray(P, dtype=np.float64)
     F = np.asarray(F, dtype=np.int64)
-    nV = len(V)
-    VF = _vertex_faces(F, nV)
-    if rings > 1:
-        A = (VF @ VF.T).astype(bool).astype(np.int8)
-        R = sp.identity(nV, dtype=np.int8, format="csr")
-        for _ in range(rings - 1):
-            R = ((R @ A) > 0).astype(np.int8)
-        VF = ((R @ VF) > 0).astype(np.int8).tocsr()
-    near = cKDTree(V).query(P)[1]
-    out = P.copy()
-    for s in range(0, nV, chunk):
-        idx = np.arange(s, min(nV, s + chunk))
-        C1 = VF[idx]
-        C2 = VF[near[idx]]
-        Cm = (C1 + C2).tocsr()  # candidate faces per row, rows in order
-        counts = np.diff(Cm.indptr)
-        f = Cm.indices.astype(np.int64)
-        if len(f) == 0:
-            continue
-        q = np.repeat(np.arange(len(idx)), counts)
-        gi = idx[q]
-        X = closest_point_triangles(P[gi], V[F[f, 0]], V[F[f, 1]], V[F[f, 2]])
-        R = X - P[gi]
-        d = np.einsum("ij,ij->i", R, R)
-        rows = np.flatnonzero(counts)
-        dmin = np.minimum.reduceat(d, Cm.indptr[rows])
-        full = np.empty(len(idx))
-        full[rows] = dmin
-        hit = np.flatnonzero(d == full[q])
-        first = np.r_[True, q[hit][1:] != q[hit][:-1]]  # q is sorted: first minimiser per row
-        sel = hit[first]
-        out[idx[q[sel]]] = X[sel]
-    has = np.asarray(VF.sum(axis=1)).ravel() > 0
-    out[~has] = V[~has]  # isolated vertices have no surface to project on
-    return out
+    if rings == 1:  # one compiled pass, the numpy loop below its twin (tested equal)
+        from ._kernels.closest import closest_points_one_ring
+
+        VF, tree = local_search(V, F) if search is None else search
+        out = closest_points_one_ring(V, F, P, VF.indptr, VF.indices, tree.query(P)[1])
+        if out is not None:
+            return out
+    return _np_closest_points_local(V, F, P, rings=rings, chunk=chunk, search=search)
 
 
 REANCHOR_KAPPA = 0.3
@@ -307,7 +293,8 @@ def reanchor(V: np.ndarray, V0: np.ndarray, F: np.ndarray, active: np.ndarray | 
         act[topo.edges[~topo.interior].ravel()] = False
     if not act.any():
         return V.copy(), np.zeros(len(V))
-    X = closest_points_local(V, F, V0)
+    search = local_search(V, F)  # one incidence and k-d tree for both projections
+    X = closest_points_local(V, F, V0, search=search)
     w = (np.where(act, 1.0, 0.0) if kappa == 0
          else blend_weights(V, V0, X, F, act, kappa))
     from . import _kernels as _k
@@ -319,7 +306,7 @@ def reanchor(V: np.ndarray, V0: np.ndarray, F: np.ndarray, active: np.ndarray | 
     if mu > 0:
         Y = tangential_smooth(T, _k.vertex_normals(np.ascontiguousarray(V), F), F, moving,
                               base=V0, weights=w, mu=mu, topo=topo)
-        Y = np.where(moving[:, None], closest_points_local(V, F, Y), V)
+        Y = np.where(moving[:, None], closest_points_local(V, F, Y, search=search), V)
     level = np.where(moving, 0 if mu > 0 else 1, 2)  # 0: smoothed, 1: T, 2: the solve's V
     while True:
         Vn = np.where((level == 0)[:, None], Y, np.where((level == 1)[:, None], T, V))
