@@ -51,12 +51,11 @@ from dataclasses import dataclass
 import numpy as np
 
 from .geometry import vertex_normals
-from .scale import _interior_vertices, _mad_std, _umbrella_operator
-from .topology import Topology, edge_topology
+from .scale import _mad_std, _sampled
+from .topology import Topology
 
 CANDIDATE_STEPS = (0, 1, 2, 3, 4, 6, 8, 12, 16)
 N_SAMPLES = 20_000
-MAX_SAMPLES = 100_000
 
 
 @dataclass(frozen=True)
@@ -135,18 +134,7 @@ def band_read(V: np.ndarray, F: np.ndarray, *, reference: np.ndarray | None = No
     -------
     BandRead
     """
-    V = np.asarray(V, dtype=np.float64)
-    F = np.asarray(F, dtype=np.int64)
-    if topo is None:
-        topo = edge_topology(F, len(V))
-    W = _umbrella_operator(topo)
-    ok = _interior_vertices(topo, 2, W)
-    idx = np.flatnonzero(ok)
-    if len(idx) > MAX_SAMPLES:  # medians over an even subsample
-        ok = np.zeros_like(ok)
-        ok[idx[:: int(np.ceil(len(idx) / MAX_SAMPLES))]] = True
-    e = topo.edges
-    lbar = float(np.linalg.norm(V[e[:, 0]] - V[e[:, 1]], axis=1).mean())
+    V, F, topo, W, ok, lbar = _sampled(V, F, topo, 2)  # medians over an even subsample
     C, S = band_models(W, ok)
     nV = vertex_normals(V, F)
     b0, b1, B0 = _bands(V, nV, W, ok)

@@ -150,6 +150,25 @@ def _mad_std(X: np.ndarray, overwrite: bool = False) -> float:
     return float(1.4826 * median_inplace(x))
 
 
+def _sampled(V, F, topo, rings: int):
+    """The inputs of a band read: float64 ``V``, int64 ``F``, the topology, the umbrella operator
+    ``W``, the mask of vertices ``rings`` rings inside (an even subsample of at most
+    :data:`MAX_SAMPLES`, every j-th one) and the mean edge length ``ℓ̄``."""
+    V = np.asarray(V, dtype=np.float64)
+    F = np.asarray(F, dtype=np.int64)
+    if topo is None:
+        topo = edge_topology(F, len(V))
+    W = _umbrella_operator(topo)
+    ok = _interior_vertices(topo, rings, W)
+    idx = np.flatnonzero(ok)
+    if len(idx) > MAX_SAMPLES:  # medians over an even subsample (every j-th interior vertex)
+        ok = np.zeros_like(ok)
+        ok[idx[:: int(np.ceil(len(idx) / MAX_SAMPLES))]] = True
+    e = topo.edges
+    lbar = float(np.linalg.norm(V[e[:, 0]] - V[e[:, 1]], axis=1).mean())
+    return V, F, topo, W, ok, lbar
+
+
 def noise_scale(V: np.ndarray, F: np.ndarray, *, reference: np.ndarray | None = None,
                 topo: Topology | None = None) -> NoiseScale:
     """Level and correlation length of the noise of ``(V, F)`` (see the module docstring).
@@ -166,19 +185,8 @@ def noise_scale(V: np.ndarray, F: np.ndarray, *, reference: np.ndarray | None = 
     -------
     NoiseScale
     """
-    V = np.asarray(V, dtype=np.float64)
-    F = np.asarray(F, dtype=np.int64)
-    if topo is None:
-        topo = edge_topology(F, len(V))
-    W = _umbrella_operator(topo)
     ks = SCALES
-    ok = _interior_vertices(topo, max(ks), W)
-    idx = np.flatnonzero(ok)
-    if len(idx) > MAX_SAMPLES:  # medians over an even subsample (every j-th interior vertex)
-        ok = np.zeros_like(ok)
-        ok[idx[:: int(np.ceil(len(idx) / MAX_SAMPLES))]] = True
-    e = topo.edges
-    lbar = float(np.linalg.norm(V[e[:, 0]] - V[e[:, 1]], axis=1).mean())
+    V, F, topo, W, ok, lbar = _sampled(V, F, topo, max(ks))
     C, S = _model_profiles(W, ks, ok)
     s = _residual_levels(V, vertex_normals(V, F), W, ks, ok)
     if reference is not None:
