@@ -28,6 +28,23 @@ if HAVE_NUMBA:
     from .faces import _tri
 
     @njit(cache=True)
+    def _anchor_vertex(V, V0, vn, s, v, w, out):  # pragma: no cover - compiled
+        # out[v] = V[v] - w P (V[v] - V0[v]), P = I - n nᵀ, n = vn[s] / |vn[s]|
+        q = np.sqrt(vn[s, 0] ** 2 + vn[s, 1] ** 2 + vn[s, 2] ** 2)
+        n0, n1, n2 = vn[s, 0], vn[s, 1], vn[s, 2]
+        if q > 0:
+            n0 /= q
+            n1 /= q
+            n2 /= q
+        d0 = V[v, 0] - V0[v, 0]
+        d1 = V[v, 1] - V0[v, 1]
+        d2 = V[v, 2] - V0[v, 2]
+        dn = (d0 * n0 + d2 * n2) + d1 * n1  # numpy's einsum order: equal bit for bit
+        out[v, 0] = V[v, 0] - w * (d0 - dn * n0)
+        out[v, 1] = V[v, 1] - w * (d1 - dn * n1)
+        out[v, 2] = V[v, 2] - w * (d2 - dn * n2)
+
+    @njit(cache=True)
     def _nb_tangential_anchor(V, V0, F, weight):  # pragma: no cover - compiled
         nV = V.shape[0]
         vn = np.zeros((nV, 3))
@@ -40,20 +57,7 @@ if HAVE_NUMBA:
                 vn[v, 2] += cz
         out = np.empty_like(V)
         for v in range(nV):
-            q = np.sqrt(vn[v, 0] ** 2 + vn[v, 1] ** 2 + vn[v, 2] ** 2)
-            n0, n1, n2 = vn[v, 0], vn[v, 1], vn[v, 2]
-            if q > 0:
-                n0 /= q
-                n1 /= q
-                n2 /= q
-            d0 = V[v, 0] - V0[v, 0]
-            d1 = V[v, 1] - V0[v, 1]
-            d2 = V[v, 2] - V0[v, 2]
-            dn = (d0 * n0 + d2 * n2) + d1 * n1  # numpy's einsum order: equal bit for bit
-            w = weight[v]
-            out[v, 0] = V[v, 0] - w * (d0 - dn * n0)
-            out[v, 1] = V[v, 1] - w * (d1 - dn * n1)
-            out[v, 2] = V[v, 2] - w * (d2 - dn * n2)
+            _anchor_vertex(V, V0, vn, v, v, weight[v], out)
         return out
 
 
@@ -100,20 +104,7 @@ if HAVE_NUMBA:
         out = V.copy()
         for s in range(verts.shape[0]):
             v = verts[s]
-            q = np.sqrt(vn[s, 0] ** 2 + vn[s, 1] ** 2 + vn[s, 2] ** 2)
-            n0, n1, n2 = vn[s, 0], vn[s, 1], vn[s, 2]
-            if q > 0:
-                n0 /= q
-                n1 /= q
-                n2 /= q
-            d0 = V[v, 0] - V0[v, 0]
-            d1 = V[v, 1] - V0[v, 1]
-            d2 = V[v, 2] - V0[v, 2]
-            dn = (d0 * n0 + d2 * n2) + d1 * n1
-            w = weight[v]
-            out[v, 0] = V[v, 0] - w * (d0 - dn * n0)
-            out[v, 1] = V[v, 1] - w * (d1 - dn * n1)
-            out[v, 2] = V[v, 2] - w * (d2 - dn * n2)
+            _anchor_vertex(V, V0, vn, s, v, weight[v], out)
         return out
 
 
