@@ -236,6 +236,9 @@ def _denoise(V, F, *, lam, th, a, robust_iters, feature_iters, mask_update_every
 
             kc = kp  # the cap's length (round 11w); 11t may shorten it further
             kp, Vp, hc, hw = heavy_length(V, F, topo.edges, gamma, info["tangential_ratio"], kp)
+            from .lengthcheck import checked_length  # round 11z: the two lengths' risk
+
+            kp, Vp, hd = checked_length(V, F, topo.edges, kp, Vp, kc)
             log.info("heavy noise on an organic mesh: %d Taubin pairs on the input first", kp)
             from . import layoutkeep as _lk
 
@@ -253,6 +256,7 @@ def _denoise(V, F, *, lam, th, a, robust_iters, feature_iters, mask_update_every
                          presmoothed=True, read_from=Vread, capped=kc < kp0)
             r.params.update(presmooth_steps=kp, presmooth_noise_estimate=r.noise_estimate,
                             presmooth_roughness=hc, presmooth_tangential_weight=hw,
+                            presmooth_risk_difference=hd,  # round 11z
                             presmooth_network_rejected=info["network_rejected"],
                             presmooth_tangential_ratio=info["tangential_ratio"],
                             presmooth_noise_rho=info["noise_rho"],

@@ -1,0 +1,109 @@
+"""The risk check of round 11t's shorter low-pass length (:mod:`meshrepair.lengthcheck`,
+round 11z)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import trimesh
+
+from meshrepair import lengthcheck as lc
+from meshrepair.geometry import vertex_normals
+from meshrepair.presmooth import presmooth
+from meshrepair.topology import edge_topology
+
+
+def _sphere(sub: int = 4, bumps: float = 0.0, freq: float = 12.0):
+    s = trimesh.creation.icosphere(subdivisions=sub)
+    V, F = np.asarray(s.vertices, np.float64), np.asarray(s.faces, np.int64)
+    if bumps:
+        V = V * (1 + bumps * np.prod(np.sin(freq * V), axis=1))[:, None]
+    E = edge_topology(F, len(V)).edges
+    ell = float(np.linalg.norm(V[E[:, 0]] - V[E[:, 1]], axis=1).mean())
+    return V, F, E, ell
+
+
+def _noisy(V, F, sigma, seed=1):
+    n = vertex_normals(V, F)
+    return V + np.random.default_rng(seed).normal(0, sigma, len(V))[:, None] * n
+
+
+def test_probe_trace_matches_the_exact_trace():
+    """Hutchinson's ``(1/3) Σ_c z_cᵀ T^k z_c`` against ``tr T^k`` from the identity's columns."""
+    V, F, E, _ = _sphere(sub=3)
+    n, free = len(V), np.ones(len(V), bool)
+    Z = lc._probe(n)
+    for k in (1, 5, 20):
+        exact = float(np.trace(presmooth(np.eye(n), E, free, k)))
+        est = float((Z * presmooth(Z, E, free, k)).sum()) / 3.0
+        assert est == pytest.approx(exact, rel=0.05)
+
+
+def test_normal_level_reads_white_normal_noise():
+    """σ̂ of one λ|μ pair is within 3 % of a known white normal noise (0.1-0.4 ℓ̄)."""
+    V, F, E, ell = _sphere()
+    for g in (0.1, 0.25, 0.4):
+        s = lc.normal_level(_noisy(V, F, g * ell), F, E)
+        assert s == pytest.approx(g * ell, rel=0.03)
+
+
+def test_risk_estimates_the_normal_error_up_to_its_constant():
+    """``R(k) − nσ²`` against the true ``‖P(T^k y − x)‖²`` (Stein: unbiased; one draw on 2,562
+    vertices agrees within 3 % of ``nσ²``, the spread of one draw), and the differences of two
+    lengths agree in sign."""
+    V, F, E, ell = _sphere(bumps=0.02)
+    sigma = 0.3 * ell
+    Y = _noisy(V, F, sigma, seed=3)
+    free = np.ones(len(V), bool)
+    true, est = {}, {}
+    for k in (3, 30):
+        X = presmooth(Y, E, free, k)
+        e = np.einsum("ij,ij->i", X - V, vertex_normals(X, F))
+        true[k] = float(e @ e)
+        est[k] = lc.normal_risk(Y, X, F, E, k, sigma) - len(V) * sigma ** 2
+        assert abs(est[k] - true[k]) < 0.03 * len(V) * sigma ** 2
+    assert np.sign(est[30] - est[3]) == np.sign(true[30] - true[3])
+
+
+def test_check_keeps_the_length_the_truth_prefers(monkeypatch):
+    """A smooth sphere under heavy noise wants the long filter; a sphere with relief at the
+    mesh's scale under light noise the short one: the check picks each (the truth agrees)."""
+    monkeypatch.setattr(lc, "LENGTH_CHECK", True)
+    for bumps, g, want_short in ((0.0, 0.35, False), (0.03, 0.05, True)):
+        V, F, E, ell = _sphere(bumps=bumps)
+        free = np.ones(len(V), bool)
+        Y = _noisy(V, F, g * ell, seed=2)
+        Xs, Xl = presmooth(Y, E, free, 2), presmooth(Y, E, free, 40)
+        err = [float(np.sum(np.einsum("ij,ij->i", X - V, vertex_normals(X, F)) ** 2))
+               for X in (Xs, Xl)]
+        assert (err[0] < err[1]) == want_short
+        keep, d = lc.keep_shorter(Y, F, E, Xs, 2, Xl, 40)
+        assert keep == want_short and (d <= 0) == keep
+        k, X, d2 = lc.checked_length(Y, F, E, 2, Xs, 40)
+        assert k == (2 if want_short else 40) and d2 == pytest.approx(d)
+        assert np.array_equal(X, Xs if want_short else Xl)
+
+
+def test_check_is_invariant_to_similarity():
+    """The decision and ``d`` (edge units) do not move under scale, rotation and translation."""
+    V, F, E, ell = _sphere(bumps=0.02)
+    Y = _noisy(V, F, 0.25 * ell, seed=4)
+    free = np.ones(len(V), bool)
+    Q, _ = np.linalg.qr(np.random.default_rng(0).normal(size=(3, 3)))
+    Yt = 7.5 * Y @ Q.T + np.array([3.0, -2.0, 1.0])
+    ds = []
+    for Z in (Y, Yt):
+        ds.append(lc.keep_shorter(Z, F, E, presmooth(Z, E, free, 4), 4,
+                                  presmooth(Z, E, free, 25), 25))
+    assert ds[0][0] == ds[1][0] and ds[1][1] == pytest.approx(ds[0][1], rel=1e-6, abs=1e-12)
+
+
+def test_check_off_or_equal_lengths_is_the_identity(monkeypatch):
+    """Equal lengths, or the check off (its default), return the short length untouched."""
+    monkeypatch.setattr(lc, "LENGTH_CHECK", True)
+    V, F, E, ell = _sphere(sub=2)
+    X = presmooth(V, E, np.ones(len(V), bool), 3)
+    assert lc.checked_length(V, F, E, 3, X, 3)[0] == 3
+    monkeypatch.setattr(lc, "LENGTH_CHECK", False)
+    k, X2, d = lc.checked_length(V, F, E, 3, X, 9)
+    assert k == 3 and X2 is X and np.isnan(d)
