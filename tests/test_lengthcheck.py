@@ -99,7 +99,7 @@ def test_check_is_invariant_to_similarity():
 
 
 def test_check_off_or_equal_lengths_is_the_identity(monkeypatch):
-    """Equal lengths, or the check off (its default), return the short length untouched."""
+    """Equal lengths, or the check off, return the short length untouched."""
     monkeypatch.setattr(lc, "LENGTH_CHECK", True)
     V, F, E, ell = _sphere(sub=2)
     X = presmooth(V, E, np.ones(len(V), bool), 3)
@@ -107,3 +107,17 @@ def test_check_off_or_equal_lengths_is_the_identity(monkeypatch):
     monkeypatch.setattr(lc, "LENGTH_CHECK", False)
     k, X2, d = lc.checked_length(V, F, E, 3, X, 9)
     assert k == 3 and X2 is X and np.isnan(d)
+
+
+def test_check_runs_only_above_the_weight_gate(monkeypatch):
+    """Round 11t's weight ``w ≤ W_MIN`` leaves 11t's length untouched (no risk read); above it
+    the smooth sphere under heavy noise takes the long length back."""
+    monkeypatch.setattr(lc, "LENGTH_CHECK", True)
+    V, F, E, ell = _sphere(bumps=0.0)
+    free = np.ones(len(V), bool)
+    Y = _noisy(V, F, 0.35 * ell, seed=2)
+    Xs = presmooth(Y, E, free, 2)
+    k, X, d = lc.checked_length(Y, F, E, 2, Xs, 40, weight=lc.W_MIN)
+    assert k == 2 and X is Xs and np.isnan(d)
+    k, X, d = lc.checked_length(Y, F, E, 2, Xs, 40, weight=lc.W_MIN + 0.05)
+    assert k == 40 and d > 0

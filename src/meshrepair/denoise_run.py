@@ -238,7 +238,7 @@ def _denoise(V, F, *, lam, th, a, robust_iters, feature_iters, mask_update_every
             kp, Vp, hc, hw = heavy_length(V, F, topo.edges, gamma, info["tangential_ratio"], kp)
             from .lengthcheck import checked_length  # round 11z: the two lengths' risk
 
-            kp, Vp, hd = checked_length(V, F, topo.edges, kp, Vp, kc)
+            kp, Vp, hd = checked_length(V, F, topo.edges, kp, Vp, kc, hw)
             log.info("heavy noise on an organic mesh: %d Taubin pairs on the input first", kp)
             from . import layoutkeep as _lk
 

@@ -37,7 +37,10 @@ low: too biased for this check, whose decision on these rows moves at ±8 % of `
 Everything is in the input's units: the risk scales with ``ℓ̄²`` and the decision is invariant
 to scale, rotation and translation.
 
-**Off by default** (``LENGTH_CHECK = False``; docs/parameters.md, round 11z). The risk reads the
+**On only where round 11t's weight** ``w > W_MIN = 0.1`` (``LENGTH_CHECK = True``; the gate was
+set by the coordinator on the rows below and checked on new seeds, where it is neutral on
+camelhead and changes nothing else: docs/parameters.md, round 11z). The helper's measurement,
+with the check on everywhere: The risk reads the
 low-passed surface ``T^k V`` correctly (against the truth: camelhead γ0.6 random seed 3,
 ``(R(k') − R(k))/(nℓ̄²)`` 4.4e-4 vs 3.4e-4 true; bunny γ0.5 random −4.4e-4 vs −5.3e-4), and it
 takes back round 10h's length on camelhead on all nine heavy random rows of seeds 1-5 (11t lost
@@ -45,15 +48,16 @@ on seven of them, by up to +26 %); but the row that matters is the *result* of t
 ``T^k V``, and the model removes much of the residual the shorter filter leaves: on igea and
 nefertiti γ0.5 random the risk prefers ``k`` (``T^{k'} V`` is worse, igea MSAE of the low-pass
 +14.5) while the final result prefers ``k'`` (igea 29.49 → 28.39). The check therefore costs
-11t's gain there, and is kept as a tested opt-in, not a default.
+11t's gain there. Those meshes read ``w ≤ 0.02``, so the gate ``w > 0.1`` leaves them to 11t.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-LENGTH_CHECK = False
+LENGTH_CHECK = True
 PROBE_SEED = 0
+W_MIN = 0.1  # the check runs only where round 11t's weight w exceeds it (coordinator's gate)
 
 
 def _probe(n: int) -> np.ndarray:
@@ -128,9 +132,11 @@ def keep_shorter(V: np.ndarray, F: np.ndarray, edges: np.ndarray, X_short: np.nd
 
 
 def checked_length(V: np.ndarray, F: np.ndarray, edges: np.ndarray, k_short: int,
-                   X_short: np.ndarray, k_long: int) -> tuple[int, np.ndarray, float]:
+                   X_short: np.ndarray, k_long: int, weight: float = 1.0
+                   ) -> tuple[int, np.ndarray, float]:
     """Round 11t's length ``k'`` kept, or round 10h's (capped by round 11w) ``k`` back, by
-    :func:`keep_shorter`; ``T^k V`` is computed here (``k' = k`` or the check off: unchanged).
+    :func:`keep_shorter`; ``T^k V`` is computed here (``k' = k``, the check off, or round 11t's
+    tangential weight ``w ≤ W_MIN``: unchanged).
 
     Returns
     -------
@@ -140,7 +146,7 @@ def checked_length(V: np.ndarray, F: np.ndarray, edges: np.ndarray, k_short: int
     """
     from .presmooth import presmooth
 
-    if not LENGTH_CHECK or int(k_short) >= int(k_long):
+    if not LENGTH_CHECK or int(k_short) >= int(k_long) or not weight > W_MIN:
         return int(k_short), X_short, float("nan")
     X_long = presmooth(V, edges, np.ones(len(V), bool), int(k_long))
     keep, d = keep_shorter(V, F, edges, X_short, int(k_short), X_long, int(k_long))
