@@ -235,10 +235,14 @@ def _denoise(V, F, *, lam, th, a, robust_iters, feature_iters, mask_update_every
             from .heavylength import heavy_length  # round 11t: the length reads relief
 
             kc = kp  # the cap's length (round 11w); 11t may shorten it further
-            kp, Vp, hc, hw = heavy_length(V, F, topo.edges, gamma, info["tangential_ratio"], kp)
+            from .presmooth import presmooth
+
+            Vk = presmooth(V, topo.edges, np.ones(len(V), bool), kc)  # T^k V, read by 11t and 11z
+            kp, Vp, hc, hw = heavy_length(V, F, topo.edges, gamma, info["tangential_ratio"], kp,
+                                          Vk=Vk)
             from .lengthcheck import checked_length  # round 11z: the two lengths' risk
 
-            kp, Vp, hd = checked_length(V, F, topo.edges, kp, Vp, kc, hw)
+            kp, Vp, hd = checked_length(V, F, topo.edges, kp, Vp, kc, hw, X_long=Vk)
             log.info("heavy noise on an organic mesh: %d Taubin pairs on the input first", kp)
             from . import layoutkeep as _lk
 

@@ -127,7 +127,8 @@ def steps_at_weight(gamma: float, tangential: float, weight: float) -> int:
 
 
 def heavy_length(V: np.ndarray, F: np.ndarray, edges: np.ndarray, gamma: float,
-                 tangential: float, steps: int) -> tuple[int, np.ndarray, float, float]:
+                 tangential: float, steps: int, *, Vk: np.ndarray | None = None
+                 ) -> tuple[int, np.ndarray, float, float]:
     """Round 10h's low-pass of the input with the length of the module docstring.
 
     Parameters
@@ -138,6 +139,7 @@ def heavy_length(V: np.ndarray, F: np.ndarray, edges: np.ndarray, gamma: float,
     gamma : γ̂, the level of the normal part of the noise
     tangential : r_t, its tangential ratio
     steps : round 10h's length ``k`` (``presmooth_steps``; > 0)
+    Vk : (nV, 3) float64, optional, ``T^k V`` when the caller has it already (not modified)
 
     Returns
     -------
@@ -149,7 +151,7 @@ def heavy_length(V: np.ndarray, F: np.ndarray, edges: np.ndarray, gamma: float,
     from .presmooth import presmooth
 
     free = np.ones(len(V), bool)
-    Vp = presmooth(V, edges, free, int(steps))
+    Vp = presmooth(V, edges, free, int(steps)) if Vk is None else Vk
     if not HEAVY_LENGTH:
         return int(steps), Vp, float("nan"), 1.0
     ell = float(np.linalg.norm(V[edges[:, 0]] - V[edges[:, 1]], axis=1).mean())

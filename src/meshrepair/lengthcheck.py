@@ -132,8 +132,8 @@ def keep_shorter(V: np.ndarray, F: np.ndarray, edges: np.ndarray, X_short: np.nd
 
 
 def checked_length(V: np.ndarray, F: np.ndarray, edges: np.ndarray, k_short: int,
-                   X_short: np.ndarray, k_long: int, weight: float = 1.0
-                   ) -> tuple[int, np.ndarray, float]:
+                   X_short: np.ndarray, k_long: int, weight: float = 1.0, *,
+                   X_long: np.ndarray | None = None) -> tuple[int, np.ndarray, float]:
     """Round 11t's length ``k'`` kept, or round 10h's (capped by round 11w) ``k`` back, by
     :func:`keep_shorter`; ``T^k V`` is computed here (``k' = k``, the check off, or round 11t's
     tangential weight ``w ≤ W_MIN``: unchanged).
@@ -148,6 +148,7 @@ def checked_length(V: np.ndarray, F: np.ndarray, edges: np.ndarray, k_short: int
 
     if not LENGTH_CHECK or int(k_short) >= int(k_long) or not weight > W_MIN:
         return int(k_short), X_short, float("nan")
-    X_long = presmooth(V, edges, np.ones(len(V), bool), int(k_long))
+    if X_long is None:  # T^k V, unless the caller has it (round 11t computed it already)
+        X_long = presmooth(V, edges, np.ones(len(V), bool), int(k_long))
     keep, d = keep_shorter(V, F, edges, X_short, int(k_short), X_long, int(k_long))
     return (int(k_short), X_short, d) if keep else (int(k_long), X_long, d)
