@@ -14,7 +14,8 @@ subproblem is captured *exactly as the solver poses it* by spying on the ``run_i
 ``meshrepair.solver`` (data ``V0``, weights ``λ M_V²``, ``z = ρ2 − β2 N`` in normalised units,
 the warm start ``V^(k−1)`` and the current Armijo step), then the run stops. Each inner solver of
 ``meshrepair.inner.run_inner`` is run on a fresh copy of it for ``--inner-iters`` iterations:
-``gd`` with a fixed step (α = the step plain Armijo settles at on this subproblem, and α/4),
+``gd`` with a fixed step (α = the step plain Armijo settles at on this subproblem, and α/4;
+halved only where it would raise the energy),
 ``armijo`` (plain, and with the Jacobi preconditioning the ADMM uses by default when the
 package has it), ``heavy_ball``, ``lbfgs`` and ``bfgs`` (only for meshes of at most
 ``--bfgs-max-vertices``
@@ -469,7 +470,8 @@ centred, divided by the mean edge length),
 and every inner solver of `meshrepair.inner.run_inner` runs {args.inner_iters} iterations on a
 fresh copy, from the warm start: plain Armijo GD, the Jacobi-preconditioned Armijo GD the ADMM
 uses by default (when the package has it: its state, step and preconditioning, are copied from
-the ADMM run), heavy ball with backtracking (27), scipy L-BFGS-B, and GD with a fixed step: α
+the ADMM run), heavy ball with backtracking (27), scipy L-BFGS-B, and GD with a fixed step
+(halved only where it would raise the energy): α
 (the step plain Armijo settled at on this subproblem) and α/4. `J*` is the lowest energy found
 by any run, including a {args.ref_iters}-iteration L-BFGS reference run from the warm start
 whose end point is `V_ref`. The "relative gap" is `(J_V − J*) / (J_V(V^(k)) − J*)`. Curves

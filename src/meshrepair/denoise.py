@@ -173,7 +173,10 @@ def denoise(
     tol : rule (35) tolerance.
     unfold : unfold folded-over faces before the solve, and those still folded after it.
     inner_solver : V-subproblem solver (``"armijo"``, ``"gd"``, ``"heavy_ball"``, ``"lbfgs"``,
-        ``"bfgs"``).
+        ``"bfgs"``; see :mod:`meshrepair.inner`). ``"gd"`` halves its fixed step whenever it would
+        raise the energy; ``"bfgs"`` is dense and refused above
+        :data:`meshrepair.inner.BFGS_MAX_VERTICES` vertices. An iterate with non-finite
+        coordinates raises :class:`MeshRepairError`.
     inner_iters : inner iterations per ADMM iteration; default 3, more for correlated noise
         (:func:`inner_iters_from_scale`).
     n_solver : N-subproblem solver (``"auto"``, ``"cg"``, ``"direct"``).

@@ -22,6 +22,10 @@ from ._select import median  # np.median's value by one selection
 
 STIFF_RATIO = 30.0  # vertices stiffer than this many times the median get a smaller step
 INNER_SOLVERS = ("armijo", "gd", "heavy_ball", "lbfgs", "bfgs")
+BFGS_MAX_VERTICES = 400
+"""Largest mesh ``inner_solver='bfgs'`` accepts: scipy's BFGS keeps a dense (3 nV)² inverse
+Hessian and updates it with dense (3 nV)³ products every iteration (a 520-vertex open sphere
+took minutes per denoise); 'lbfgs' is the solver for larger meshes."""
 
 
 class VSubproblem:
@@ -206,11 +210,28 @@ def _solve_armijo_plain(prob: VSubproblem, V: np.ndarray, iters: int, state: Inn
 
 def solve_gd(prob: VSubproblem, V: np.ndarray, iters: int, state: InnerState,
              step: float | None = None) -> np.ndarray:
-    """Plain gradient descent with a fixed step (``state.step`` unless given)."""
+    """Gradient descent with a fixed step (``state.step`` unless given), safeguarded.
+
+    The step stays fixed while it lowers ``J_V``; a step that would raise ``J_V`` or leave the
+    finite numbers is halved (and kept halved) until it lowers ``J_V``, so that a step too large
+    for the problem's curvature (``α > 2 / L``) cannot make the iterates diverge. Below
+    ``1e-14`` the solver stops at the last accepted point (no step lowers ``J_V`` along
+    ``-∇J_V``). The last accepted step is handed back in ``state.step`` for the next call.
+    """
     alpha = state.step if step is None else step
+    E, g = prob.energy_grad(V)
     for _ in range(iters):
-        _, g = prob.energy_grad(V)
-        V = V - alpha * g
+        while alpha > 1e-14:
+            Vn = V - alpha * g
+            En, gn = prob.energy_grad(Vn)
+            if En <= E and np.isfinite(En):  # False for NaN
+                break
+            alpha *= 0.5
+        else:
+            break
+        V, E, g = Vn, En, gn
+        if step is None:
+            state.step = alpha
     return V
 
 
@@ -255,7 +276,10 @@ def solve_lbfgs(prob: VSubproblem, V: np.ndarray, iters: int, state: InnerState,
     if method == "L-BFGS-B":
         opts["ftol"] = 1e-15
     res = minimize(fun, V.ravel(), jac=True, method=method, options=opts)
-    return res.x.reshape(shape)
+    X = res.x.reshape(shape)
+    if not np.all(np.isfinite(X)):  # a line search that left the finite numbers: no progress
+        return V
+    return X
 
 
 def run_inner(name: str, prob: VSubproblem, V: np.ndarray, iters: int, state: InnerState
@@ -270,8 +294,15 @@ def run_inner(name: str, prob: VSubproblem, V: np.ndarray, iters: int, state: In
     if name == "lbfgs":
         return solve_lbfgs(prob, V, iters, state)
     if name == "bfgs":
-        if V.size > 30000:
-            raise ValueError("inner_solver='bfgs' stores a dense Hessian; use 'lbfgs' for meshes "
-                             "with more than 10000 vertices")
+        if len(V) > BFGS_MAX_VERTICES:
+            from .errors import MeshRepairError
+
+            mb = (V.size ** 2) * 8 / 2**20
+            raise MeshRepairError(
+                f"inner_solver='bfgs' stores a dense (3·{len(V)})² inverse Hessian ({mb:.0f} MB) "
+                f"and updates it with dense products every iteration; use inner_solver='lbfgs' "
+                f"for meshes with more than {BFGS_MAX_VERTICES} vertices")
         return solve_lbfgs(prob, V, iters, state, method="BFGS")
-    raise ValueError(f"unknown inner solver {name!r}; choose one of {INNER_SOLVERS}")
+    from .errors import MeshRepairError
+
+    raise MeshRepairError(f"unknown inner solver {name!r}; choose one of {INNER_SOLVERS}")

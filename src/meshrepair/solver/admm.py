@@ -297,6 +297,8 @@ class ADMMSolver:
                     res_t = _k.update_rho1(t, N, l, fa, fb, rho1, beta1)
                     Nv, res_n = _fused.normals_update_rho2(Vn, F, N, rho2, beta2)
                     rel = _fused.rel_change(Vn, V)
+                    if not np.isfinite(rel):  # NaN or inf anywhere in V^(k+1)
+                        self._not_finite(o.inner_solver, k + 1)
                     V = Vn
                     k += 1
                     if mixed and w_int is not None:  # the two passes below in one
@@ -357,6 +359,16 @@ class ADMMSolver:
             scale=scale,
             state=s if keep_state else None,
         )
+
+    @staticmethod
+    def _not_finite(inner_solver: str, k: int) -> None:
+        """Refuse an iterate with non-finite coordinates (the run cannot continue from it)."""
+        from ..errors import MeshRepairError
+
+        raise MeshRepairError(
+            f"the V-update (26) of ADMM iteration {k} gave non-finite vertex coordinates "
+            f"(inner solver {inner_solver!r}); the mesh may have degenerate (zero-area) faces: "
+            f"remove them, or use the default inner_solver='armijo'")
 
     def with_options(self, **changes) -> ADMMSolver:
         """A solver on the same connectivity with some options changed (reuses the topology)."""
