@@ -113,11 +113,57 @@ def _area_switch(max_area: float) -> str:
                                             trim="-")
 
 
+STEINER_FACTOR = 20
+"""Triangle may add at most this many times the vertices a patch needs at its area bound (the
+polygon's area over the bound, halved, plus one per loop vertex), and at least
+:data:`STEINER_MIN`. On the holes of the unit and shared-mesh hole tests a patch adds at most
+2.25 times that count;
+a polygon that needs far more is a long thin one (a loop through a vertex far from the others):
+quality triangles along a sliver of width w and length L need about (L / w)² of them."""
+STEINER_MIN = 10_000
+"""Steiner points Triangle may always add (about 20 ms of its work)."""
+STEINER_MAX = 1_000_000
+"""Steiner points Triangle never exceeds (about the 2 M new-face budget of hole filling)."""
+
+
+def steiner_cap(Q: np.ndarray, n_loop: int, max_area: float | None) -> int:
+    """The most Steiner points a quality triangulation of the 2-D points ``Q`` (``n_loop`` of
+    them on the boundary) with triangle areas at most ``max_area`` may add
+    (:data:`STEINER_FACTOR`; the area is that of ``Q``'s convex hull, a bound of the region's)."""
+    from scipy.spatial import ConvexHull, QhullError
+
+    try:
+        area = float(ConvexHull(np.asarray(Q, dtype=np.float64)).volume)
+    except (QhullError, ValueError):  # collinear or too few points: no area
+        area = 0.0
+    n_tri = area / max_area if max_area else 0.0
+    n_tri = n_tri if np.isfinite(n_tri) else float(STEINER_MAX)
+    return int(min(STEINER_MAX, STEINER_FACTOR * (n_tri / 2.0 + n_loop) + STEINER_MIN))
+
+
+def triangulate_capped(data: dict, opts: str, cap: int) -> dict:
+    """``triangle.triangulate(data, opts)`` with at most ``cap`` Steiner points (switch ``S``);
+    :class:`MeshRepairError` when the cap is reached (the quality mesh of this polygon would
+    need more: refused after bounded work, instead of running for hours)."""
+    import triangle
+
+    n_in = len(data["vertices"])
+    out = triangle.triangulate(data, f"{opts}S{max(int(cap), 0)}")
+    if len(out["vertices"]) - n_in >= cap:
+        X = np.asarray(data["vertices"], dtype=np.float64)
+        seg = np.asarray(data["segments"], dtype=np.int64).reshape(-1, 2)
+        el = np.linalg.norm(X[seg[:, 0]] - X[seg[:, 1]], axis=1)
+        raise MeshRepairError(
+            f"the patch of this hole would need more than {cap:,} new vertices for triangles "
+            f"with angles of at least {MIN_ANGLE:g}°: in its planar view the constrained edges "
+            f"range from {el.min():.3g} to {el.max():.3g} in length, a long thin polygon; check "
+            "the mesh for vertices far from the others (outliers), or exclude this hole")
+    return out
+
+
 def _triangulate(Q: np.ndarray, segments: np.ndarray, max_area: float | None,
                  holes: np.ndarray | None = None, quality: bool = True) -> tuple[np.ndarray,
                                                                                   np.ndarray]:
-    import triangle
-
     data = {"vertices": Q, "segments": segments}
     if holes is not None:
         data["holes"] = holes
@@ -126,7 +172,7 @@ def _triangulate(Q: np.ndarray, segments: np.ndarray, max_area: float | None,
         opts += f"q{MIN_ANGLE:g}"
     if max_area is not None:
         opts += _area_switch(max_area)
-    out = triangle.triangulate(data, opts)
+    out = triangulate_capped(data, opts, steiner_cap(Q, len(Q), max_area))
     X = np.asarray(out["vertices"], dtype=np.float64)
     T = np.asarray(out.get("triangles", np.empty((0, 3))), dtype=np.int64).reshape(-1, 3)
     return X, T

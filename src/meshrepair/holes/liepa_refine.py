@@ -17,6 +17,8 @@ from ._geom2d import (
     _max_area_for,
     _orient_patch,
     _polygon_is_simple,
+    steiner_cap,
+    triangulate_capped,
 )
 from .liepa import min_weight_triangulation
 
@@ -215,8 +217,6 @@ def _refine_on_triangulation(k: int, S: np.ndarray, Ts: np.ndarray, Qs: np.ndarr
     -------
     (X (m, 3), T (t, 3), X2 (m, 2)), or None if Triangle changed the loop vertices.
     """
-    import triangle
-
     Q = Qs[:k]
     segs = np.c_[np.arange(k), (np.arange(k) + 1) % k]
     if creases is not None and len(creases):
@@ -242,7 +242,10 @@ def _refine_on_triangulation(k: int, S: np.ndarray, Ts: np.ndarray, Qs: np.ndarr
     if not isometric:
         amax *= float(areas(Qs, Ts).sum()) / max(float(areas(S, Ts).sum()), 1e-300)
     opts = f"pYQq{MIN_ANGLE:g}"
-    out = triangle.triangulate({"vertices": Q, "segments": segs}, opts + _area_switch(amax))
+    # Triangle's work is capped (a loop through a far-away vertex is a sliver whose quality
+    # mesh is unbounded): the two refinement rounds share the cap of the first call
+    cap = steiner_cap(Q, k, amax)
+    out = triangulate_capped({"vertices": Q, "segments": segs}, opts + _area_switch(amax), cap)
     for _ in range(0 if isometric else 2):
         X2 = np.asarray(out["vertices"], dtype=np.float64)
         T = np.asarray(out["triangles"], dtype=np.int64)
@@ -250,8 +253,9 @@ def _refine_on_triangulation(k: int, S: np.ndarray, Ts: np.ndarray, Qs: np.ndarr
         if (a3 <= 1.25 * target).all():
             break
         bound = np.where(a3 > 1.25 * target, a2 * target / np.maximum(a3, 1e-300), -1.0)
-        out = triangle.triangulate({"vertices": X2, "segments": out["segments"], "triangles": T,
-                                    "triangle_max_area": bound}, f"r{opts}a")
+        out = triangulate_capped({"vertices": X2, "segments": out["segments"], "triangles": T,
+                                  "triangle_max_area": bound}, f"r{opts}a",
+                                 cap - (len(X2) - k))
     X2 = np.asarray(out["vertices"], dtype=np.float64)
     T = np.asarray(out.get("triangles", np.empty((0, 3))), dtype=np.int64).reshape(-1, 3)
     if len(T) == 0 or len(X2) < k or not np.allclose(X2[:k], Q):

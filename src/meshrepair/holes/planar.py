@@ -173,7 +173,6 @@ def _enclose_with_creases(P, Q, segs, h2, route, c, e1, e2, method, Qc=None,
     """Planar triangulation of the loop polygon ``Q`` with the crease segments of ``route`` as
     constraints; crease vertices on the Hermite curves, the rest on the membrane spanning loop
     and creases. None when the routes do not fit inside the polygon."""
-    import triangle
     from matplotlib.path import Path as MPath
 
     k = len(P)
@@ -219,9 +218,11 @@ def _enclose_with_creases(P, Q, segs, h2, route, c, e1, e2, method, Qc=None,
     markers = np.r_[np.ones(k, np.int32), 2 + np.arange(len(cs), dtype=np.int32)]
     data = {"vertices": Qall, "segments": np.r_[segs, cs],
             "segment_markers": markers[:, None]}
-    from ._geom2d import MIN_ANGLE, _area_switch
+    from ._geom2d import MIN_ANGLE, _area_switch, steiner_cap, triangulate_capped
 
-    out = triangle.triangulate(data, f"pYQq{MIN_ANGLE:g}" + _area_switch(_max_area_for(h2)))
+    amax = _max_area_for(h2)
+    out = triangulate_capped(data, f"pYQq{MIN_ANGLE:g}" + _area_switch(amax),
+                             steiner_cap(Qall, len(Qall), amax))
     X2 = np.asarray(out["vertices"], dtype=np.float64)
     T = np.asarray(out.get("triangles", np.empty((0, 3))), dtype=np.int64).reshape(-1, 3)
     if len(T) == 0 or len(X2) < len(Qall) or not np.allclose(X2[: len(Qall)], Qall):
