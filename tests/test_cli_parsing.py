@@ -115,3 +115,30 @@ def test_every_option_has_help_with_its_default():
         block = text[text.index(opt):]
         assert f"default: {default}" in block[:400], opt
     assert "result" in _subparsers(p)["metrics"].format_help()
+
+
+@pytest.mark.parametrize(("cmd", "bad", "hint"), [
+    ("denoise", "--iterations", "--robust-iters or --feature-iters"),
+    ("fill", "--keepborder", "--keep-border"),
+    ("denoise", "--lamda=3", "--lam"),
+])
+def test_unknown_option_shows_the_sub_command_usage_and_a_close_match(meshes, tmp_path, capsys,
+                                                                     cmd, bad, hint):
+    sphere, _ = meshes
+    with pytest.raises(SystemExit) as exc:
+        main([cmd, str(sphere), str(tmp_path / "o.ply"), bad, *(["3"] if "=" not in bad else [])])
+    assert exc.value.code == 2
+    err = capsys.readouterr().err
+    assert err.startswith(f"usage: meshrepair {cmd} ")  # the sub-command's usage, not the top's
+    assert "COMMAND ..." not in err
+    assert f"did you mean {hint}?" in err
+    assert not (tmp_path / "o.ply").exists()
+
+
+def test_unknown_option_far_from_every_option_gets_no_guess(meshes, tmp_path, capsys):
+    sphere, _ = meshes
+    with pytest.raises(SystemExit):
+        main(["fill", str(sphere), str(tmp_path / "o.ply"), "--xyz"])
+    err = capsys.readouterr().err
+    assert "usage: meshrepair fill" in err and "unrecognized arguments: --xyz" in err
+    assert "did you mean" not in err

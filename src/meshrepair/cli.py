@@ -42,10 +42,11 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv: list[str] | None = None) -> int:
-    from .commands.parsing import normalise_argv
+    from .commands.parsing import normalise_argv, parse_or_explain
 
     parser = build_parser()
-    args = parser.parse_args(normalise_argv(parser, sys.argv[1:] if argv is None else argv))
+    args = parse_or_explain(parser, normalise_argv(parser, sys.argv[1:] if argv is None
+                                                   else argv))
     level = logging.WARNING - 10 * min(args.verbose, 2)
     logging.basicConfig(level=level, format="%(levelname)s %(name)s: %(message)s")
     if not getattr(args, "func", None):

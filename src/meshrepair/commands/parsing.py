@@ -137,3 +137,51 @@ def document_defaults(parser: argparse.ArgumentParser) -> None:
             if isinstance(d, (list, tuple)):
                 d = " ".join(str(x) for x in d)
             a.help = f"{a.help} (default: {str(d).replace('%', '%%')})"
+
+
+def _close_options(sub: argparse.ArgumentParser, token: str) -> list[str]:
+    """The options of ``sub`` closest to the unknown ``token``: difflib's ratio to the whole
+    option or to one of its words (``--iterations`` is close to ``--feature-iters`` by its word
+    ``iters``); the best, and any as close, if at least 0.6."""
+    import difflib
+
+    name = token.split("=", 1)[0].lstrip("-").lower()
+    best: dict[str, float] = {}
+    for o in _options(sub):
+        if not o.startswith("--"):
+            continue
+        words = [o[2:], *o[2:].split("-")]
+        best[o] = max(difflib.SequenceMatcher(None, name, w).ratio() for w in words)
+    if not best:
+        return []
+    top = max(best.values())
+    if top < 0.6:
+        return []
+    return [o for o, r in best.items() if r >= top - 0.02][:3]
+
+
+def parse_or_explain(parser: argparse.ArgumentParser, argv: list[str]) -> argparse.Namespace:
+    """``parser.parse_args(argv)``, except that arguments the sub-command does not know are
+    reported with the sub-command's usage (not the top-level one) and, for each unknown option,
+    the closest known one (``--iterations`` -> ``did you mean --iters?``). Exits with status 2,
+    as argparse does."""
+    import sys
+
+    args, extra = parser.parse_known_args(argv)
+    if not extra:
+        return args
+    cmd = getattr(args, "command", None)
+    sub = _subparsers(parser).get(cmd) if cmd else None
+    target = sub or parser
+    hints = []
+    for t in extra:
+        if t.startswith("-") and sub is not None:
+            close = _close_options(sub, t)
+            if close:
+                hints.append(f"{t.split('=', 1)[0]}: did you mean {' or '.join(close)}?")
+    msg = "unrecognized arguments: " + " ".join(extra)
+    if hints:
+        msg += "\n" + "\n".join(hints)
+    target.print_usage(sys.stderr)
+    target.exit(2, f"{target.prog}: error: {msg}\n")
+    raise AssertionError("unreachable")  # pragma: no cover
