@@ -168,22 +168,45 @@ class ProgressBar:
     """A tqdm progress bar fed by the solver's per-iteration callback.
 
     The bar is created at the first iteration, so a run that fails during validation prints
-    no empty ``0it`` bar before its error message.
+    no empty ``0it`` bar before its error message. A task may run the solver more than once
+    (``denoise`` solves again after a check of its first result): an entry whose ``iter``
+    does not follow the previous one starts a new pass, and the bar starts again from 0 under
+    ``desc (pass N)``, so that it counts the iterations of the pass the summary reports.
+    ``passes`` and ``count`` (iterations of all passes) are kept for that summary.
     """
 
     def __init__(self, total: int | None, desc: str, enabled: bool = True):
         self.total, self.desc, self.enabled = total, desc, enabled
         self.bar = None
+        self.passes = 0
+        self.count = 0
+        self._last = None
 
     def __call__(self, entry: dict) -> None:
+        it = entry.get("iter")
+        new_pass = self.passes == 0 or it is None or self._last is None or it <= self._last
+        self._last = it
+        self.count += 1
+        if new_pass:
+            self.passes += 1
         if not self.enabled:
             return
         if self.bar is None:
             from tqdm import tqdm
 
             self.bar = tqdm(total=self.total, desc=self.desc, unit="it", leave=False)
+        elif new_pass:
+            self.bar.reset(total=self.total)
+            self.bar.set_description(f"{self.desc} (pass {self.passes})")
         self.bar.update(1)
         self.bar.set_postfix(stage=entry.get("stage", ""), change=f"{entry['rel_change']:.1e}")
+
+    def passes_note(self) -> str:
+        """``"; the last of 2 solver passes, 194 iterations in all"`` when there were several
+        passes, else ``""`` (for the command's summary line)."""
+        if self.passes <= 1:
+            return ""
+        return f"; the last of {self.passes} solver passes, {self.count} iterations in all"
 
     def close(self) -> None:
         if self.bar is not None:

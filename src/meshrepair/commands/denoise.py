@@ -65,7 +65,7 @@ def run_denoise(args: argparse.Namespace) -> int:
     write_mesh(out, r.V, r.F, vertex_attributes=attrs or None, overwrite=args.force)
     _write_history(log_path, r, {"seconds": dt}, args.force)
     print(f"denoised {len(r.V)} vertices in {r.iterations} iterations ({dt:.2f} s, "
-          f"{r.stop_reason}); noise estimate gamma={r.noise_estimate:.3f}, lambda="
+          f"{r.stop_reason}{bar.passes_note()}); noise estimate gamma={r.noise_estimate:.3f}, lambda="
           f"{r.params['lam']:.3g}, sharp edges {int(r.M_E.sum())}/{len(r.M_E)}")
     if r.stop_reason == "interrupted":
         print("interrupted: wrote the current iterate", file=sys.stderr)
@@ -153,7 +153,8 @@ def run_demo(args: argparse.Namespace) -> int:
     print(f"  {'':10s} {'MSAE (deg^2)':>14s} {'E_V':>12s}")
     print(f"  {'noisy':10s} {m0:14.2f} {e0:12.3e}")
     print(f"  {'denoised':10s} {m1:14.2f} {e1:12.3e}")
-    print(f"  {r.iterations} iterations in {dt:.2f} s; sharp edges kept: {int(r.M_E.sum())}")
+    print(f"  {r.iterations} iterations in {dt:.2f} s{bar.passes_note()}; sharp edges kept: "
+          f"{int(r.M_E.sum())}")
     print(f"  wrote {out}")
     if not args.no_render:
         try:
