@@ -65,8 +65,8 @@ def run_denoise(args: argparse.Namespace) -> int:
     write_mesh(out, r.V, r.F, vertex_attributes=attrs or None, overwrite=args.force)
     _write_history(log_path, r, {"seconds": dt}, args.force)
     print(f"denoised {len(r.V)} vertices in {r.iterations} iterations ({dt:.2f} s, "
-          f"{r.stop_reason}{bar.passes_note()}); noise estimate gamma={r.noise_estimate:.3f}, lambda="
-          f"{r.params['lam']:.3g}, sharp edges {int(r.M_E.sum())}/{len(r.M_E)}")
+          f"{r.stop_reason}{bar.passes_note()}); noise estimate gamma={r.noise_estimate:.3f}, "
+          f"lambda={r.params['lam']:.3g}, sharp edges {int(r.M_E.sum())}/{len(r.M_E)}")
     if r.stop_reason == "interrupted":
         print("interrupted: wrote the current iterate", file=sys.stderr)
     print(f"wrote {out}")
