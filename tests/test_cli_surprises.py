@@ -3,6 +3,10 @@
 from __future__ import annotations
 
 import re
+import subprocess
+import sys
+
+import pytest
 
 import meshrepair as mr
 from meshrepair.cli import main
@@ -45,3 +49,39 @@ def test_denoise_summary_states_every_pass(tmp_path, capsys):
                   r"all", text)
     assert m, text
     assert int(m.group(3)) > int(m.group(1))
+
+
+def _pinched_mesh(path):
+    """Two icospheres sharing one vertex (a pinched, non-manifold vertex)."""
+    import numpy as np
+    import trimesh
+
+    from meshrepair.io import write_mesh
+
+    a = trimesh.creation.icosphere(2)
+    b = a.copy()
+    b.apply_translation([2.0, 0.0, 0.0])
+    i = int(np.argmax(a.vertices[:, 0]))
+    j = int(np.argmin(b.vertices[:, 0])) + len(a.vertices)
+    V = np.r_[a.vertices, b.vertices]
+    F = np.r_[a.faces, b.faces + len(a.vertices)]
+    F[F == j] = i
+    keep = np.ones(len(V), bool)
+    keep[j] = False
+    remap = np.cumsum(keep) - 1
+    return write_mesh(path, V[keep], remap[F])
+
+
+@pytest.mark.parametrize("cmd", [["denoise", "{m}", "{o}.ply", "--report", "{o}.html"],
+                                 ["fill", "{m}", "{o}.ply", "--report", "{o}.html"]])
+def test_each_warning_once_per_command(tmp_path, cmd):
+    m = _pinched_mesh(tmp_path / "pinched.ply")
+    o = tmp_path / "out"
+    argv = [a.format(m=m, o=o) for a in cmd]
+    res = subprocess.run([sys.executable, "-m", "meshrepair.cli", *argv, "-q"],
+                         capture_output=True, text=True, timeout=300)
+    assert res.returncode == 0, res.stderr[-2000:]
+    lines = [x for x in res.stderr.splitlines() if x.startswith("WARNING")]
+    pinched = [x for x in lines if "pinched" in x]
+    assert len(pinched) == 1, res.stderr
+    assert len(lines) == len(set(lines)), res.stderr

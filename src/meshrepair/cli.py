@@ -54,6 +54,10 @@ def main(argv: list[str] | None = None) -> int:
         return 1
     from threadpoolctl import threadpool_limits
 
+    once = _OncePerCommand()
+    handlers = list(logging.getLogger().handlers)
+    for h in handlers:
+        h.addFilter(once)
     try:
         with threadpool_limits(1):  # sparse/BLAS threads only slow this workload down
             rc = int(args.func(args) or 0)
@@ -71,6 +75,28 @@ def main(argv: list[str] | None = None) -> int:
     except KeyboardInterrupt:
         print("meshrepair: interrupted", file=sys.stderr)
         return 130
+    finally:
+        for h in handlers:
+            h.removeFilter(once)
+
+
+class _OncePerCommand(logging.Filter):
+    """Lets each warning through once per command: a command reads or checks the same mesh
+    more than once (the solve, the report's renders, the viewer), and the same message about
+    it (pinched vertices, unreferenced vertices) is news only the first time."""
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.seen: set[tuple[str, int, str]] = set()
+
+    def filter(self, record: logging.LogRecord) -> bool:
+        if record.levelno < logging.WARNING:
+            return True
+        key = (record.name, record.levelno, record.getMessage())
+        if key in self.seen:
+            return False
+        self.seen.add(key)
+        return True
 
 
 if __name__ == "__main__":  # pragma: no cover
