@@ -85,3 +85,43 @@ def test_each_warning_once_per_command(tmp_path, cmd):
     pinched = [x for x in lines if "pinched" in x]
     assert len(pinched) == 1, res.stderr
     assert len(lines) == len(set(lines)), res.stderr
+
+
+def _write_holed_sphere(path):
+    import numpy as np
+    import trimesh
+
+    from meshrepair.io import write_mesh
+
+    m = trimesh.creation.icosphere(3)
+    V, F = np.asarray(m.vertices), np.asarray(m.faces)
+    c = V[F].mean(axis=1)
+    sub = trimesh.Trimesh(V, F[(c[:, 2] < 0.8) & (c[:, 0] < 0.8)], process=False)  # two holes
+    sub.remove_unreferenced_vertices()
+    return write_mesh(path, sub.vertices, sub.faces)
+
+
+def _write_open_scan(path):
+    """A height field over a square: an open surface whose only loop is its border."""
+    import numpy as np
+    from scipy.spatial import Delaunay
+
+    from meshrepair.io import write_mesh
+
+    xs = np.linspace(-1.0, 1.0, 20)
+    X, Y = np.meshgrid(xs, xs)
+    P = np.c_[X.ravel(), Y.ravel(), 0.2 * np.sin(2 * X.ravel()) * np.cos(Y.ravel())]
+    return write_mesh(path, P, Delaunay(P[:, :2]).simplices)
+
+
+@pytest.mark.parametrize(("make", "expect"), [(_write_holed_sphere, 2), (_write_open_scan, 0)])
+def test_denoise_names_the_holes_it_keeps_and_points_to_fill(tmp_path, capsys, make, expect):
+    src = make(tmp_path / "in.ply")
+    out = tmp_path / "out.ply"
+    assert main(["denoise", str(src), str(out), "-q"]) == 0
+    text = capsys.readouterr().out
+    if expect:
+        assert f"note: the mesh has {expect} holes" in text
+        assert f"meshrepair fill {out} FILLED.ply" in text
+    else:
+        assert "hole" not in text

@@ -30,6 +30,21 @@ def _write_history(path: Path | None, result, extra: dict, force: bool) -> None:
     write_json_log(path, data, force=force)
 
 
+def holes_note(V: np.ndarray, F: np.ndarray, out) -> str:
+    """A one-line hint naming the holes ``denoise`` kept (boundary loops that are not the open
+    border of a scan, :func:`meshrepair.holes.border.find_borders`), or ``""``."""
+    from ..holes.border import find_borders
+    from ..holes.detect import _find_holes
+
+    holes = _find_holes(V, F)
+    n = len(holes) - len(find_borders(V, F, holes))
+    if n <= 0:
+        return ""
+    return (f"note: the mesh has {n} hole{'s' if n > 1 else ''} (boundary loops that are not an "
+            f"open scan's border), kept as they are; 'meshrepair fill {out} FILLED.ply' fills "
+            f"{'them' if n > 1 else 'it'}")
+
+
 def run_denoise(args: argparse.Namespace) -> int:
     from ..denoise import denoise
     from ..io import read_mesh, write_mesh
@@ -70,6 +85,9 @@ def run_denoise(args: argparse.Namespace) -> int:
     if r.stop_reason == "interrupted":
         print("interrupted: wrote the current iterate", file=sys.stderr)
     print(f"wrote {out}")
+    note = holes_note(r.V, r.F, out)
+    if note:
+        print(note)
     if report_path is not None:
         from ..report import write_report
 
