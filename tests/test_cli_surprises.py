@@ -125,3 +125,27 @@ def test_denoise_names_the_holes_it_keeps_and_points_to_fill(tmp_path, capsys, m
         assert f"meshrepair fill {out} FILLED.ply" in text
     else:
         assert "note:" not in text and "meshrepair fill" not in text
+
+
+def test_first_run_says_it_compiles_and_the_summary_counts_it(tmp_path):
+    import os
+
+    src = _write_holed_sphere(tmp_path / "in.ply")
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path / "numba-cache"))  # an empty cache
+    env.pop("MESHREPAIR_NO_NUMBA", None)
+
+    def run(out):
+        res = subprocess.run([sys.executable, "-m", "meshrepair.cli", "denoise", str(src),
+                              str(tmp_path / out)], capture_output=True, text=True, env=env,
+                             timeout=600)
+        assert res.returncode == 0, res.stderr[-2000:]
+        return res
+
+    cold = run("a.ply")
+    assert cold.stderr.count("compiling kernels (first run only") == 1
+    m = re.search(r"\(([\d.]+) s including ([\d.]+) s of one-off kernel compilation", cold.stdout)
+    assert m, cold.stdout
+    assert 0.5 <= float(m.group(2)) <= float(m.group(1))
+    warm = run("b.ply")  # the same cache, now full
+    assert "compiling kernels" not in warm.stderr
+    assert "kernel compilation" not in warm.stdout

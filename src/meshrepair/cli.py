@@ -59,8 +59,15 @@ def main(argv: list[str] | None = None) -> int:
     for h in handlers:
         h.addFilter(once)
     try:
-        with threadpool_limits(1):  # sparse/BLAS threads only slow this workload down
+        from .commands import compiling
+
+        quiet = bool(getattr(args, "quiet", False) or getattr(args, "quiet_all", False))
+        compiling.CLOCK = compiling.CompileClock(announce=not quiet)
+        with threadpool_limits(1), compiling.CLOCK:  # BLAS threads only slow this work down
             rc = int(args.func(args) or 0)
+        note = compiling.CLOCK.closing_note()
+        if note:
+            print(note)
         sys.stdout.flush()  # a closed pipe (| head) shows up here, not at exit
         return rc
     except BrokenPipeError:  # the reader went away (| head): stop quietly, like other tools
