@@ -114,7 +114,13 @@ def test_denoise_folder_then_resume(client, collection, tmp_path):
     assert sorted(json.loads(s)["rel"] for s in lines) == sorted(recs)
     page = (out / "index.html").read_text()
     assert max(page.index(f">{r}<") for r in BAD) < min(page.index(f">{r}</a>") for r in GOOD)
-    assert "non-manifold edges" in page and 'src="thumbnails/a.ply.before.png"' in page
+    assert "non-manifold edges" in page
+    # self-contained: the thumbnails are embedded (the PNG bytes the workers wrote), not linked
+    import base64
+
+    png = Path(recs["a.ply"]["thumbnails"]["before"]).read_bytes()
+    assert f'src="data:image/png;base64,{base64.b64encode(png).decode()}"' in page
+    assert "thumbnails/" not in page
     # inputs untouched, no temporary files anywhere
     assert {p: p.read_bytes() for p in root.rglob("*") if p.is_file()} == before
     assert not list(out.rglob("*.tmp"))

@@ -1,10 +1,11 @@
 """``OUT/index.html``: the report of a batch run, one row per mesh, failures first.
 
 Each row shows the before/after thumbnails the workers rendered with
-:func:`meshrepair.render.render_mesh` (PNG files under ``OUT/thumbnails/``, linked relatively so
-that the folder can be moved or served as is), the status or error message, the sizes, time,
-peak memory and the task's metrics. The page is one static file without scripts; it is written
-atomically (temporary file, then rename).
+:func:`meshrepair.render.render_mesh` (kept as PNG files under ``OUT/thumbnails/`` and embedded in
+the page as ``data:image/png;base64`` URIs, so the page shows them when copied or mailed alone),
+the status or error message, the sizes, time, peak memory and the task's metrics. The page is one
+static file without scripts; the output meshes are linked relatively. It is written atomically
+(temporary file, then rename).
 """
 
 from __future__ import annotations
@@ -41,12 +42,19 @@ def _rel_link(path: str | None, out: Path) -> str | None:
         return Path(path).resolve().as_uri()
 
 
-def _thumb(path: str | None, out: Path, alt: str) -> str:
-    link = _rel_link(path, out)
-    if link is None:
+def _thumb(path: str | None, alt: str) -> str:
+    """The thumbnail's cell, its PNG embedded as a data URI (``-`` when there is none)."""
+    import base64
+
+    if not path:
         return '<td class="thumb">-</td>'
-    return (f'<td class="thumb"><img src="{_esc(link)}" alt="{_esc(alt)}" loading="lazy" '
-            'width="160" height="160"></td>')
+    try:
+        png = Path(path).read_bytes()
+    except OSError:
+        return f'<td class="thumb">{_esc(alt)}: missing</td>'
+    uri = "data:image/png;base64," + base64.b64encode(png).decode("ascii")
+    return (f'<td class="thumb"><img src="{uri}" alt="{_esc(alt)}" width="160" '
+            'height="160"></td>')
 
 
 def _row(rec: dict, out: Path) -> str:
@@ -70,8 +78,8 @@ def _row(rec: dict, out: Path) -> str:
     secs = rec.get("seconds")
     mem = rec.get("peak_rss_mb")
     return (f'<tr class="{"ok" if ok else "bad"}"><td>{mesh}</td><td>{_esc(status)}</td>'
-            f'{_thumb(thumbs.get("before"), out, "before")}'
-            f'{_thumb(thumbs.get("after"), out, "after")}'
+            f'{_thumb(thumbs.get("before"), "before")}'
+            f'{_thumb(thumbs.get("after"), "after")}'
             f"<td>{sizes}</td><td>{'-' if secs is None else f'{secs:.2f}'}</td>"
             f"<td>{'-' if mem is None else f'{mem:.0f}'}</td><td>{metrics}</td></tr>")
 
