@@ -121,9 +121,11 @@ def _add_view_options(p: argparse.ArgumentParser) -> None:
     p.add_argument("--shading", choices=("flat", "smooth"), default="flat",
                    help="per-face or interpolated vertex normals (default flat)")
     p.add_argument("--azimuth", type=float, default=None,
-                   help="camera rotation about +y in degrees (default 0: looking down -z)")
+                   help="camera rotation about +y in degrees (0: looking down -z; default: "
+                   "the object's front, upright; see docs/viewer.md)")
     p.add_argument("--elevation", type=float, default=None,
-                   help="camera tilt towards +y in degrees (default 0)")
+                   help="camera tilt towards +y in degrees (0 when --azimuth is given; "
+                   "default: the object's front, upright)")
     p.add_argument("--sharp-edges", action="store_true",
                    help="overlay the sharp-edge mask M_E (dihedral angle above --sharp-threshold)")
     p.add_argument("--sharp-threshold", type=float, default=30.0, metavar="DEG",
@@ -133,7 +135,8 @@ def _add_view_options(p: argparse.ArgumentParser) -> None:
     p.add_argument("--force", action="store_true", help="overwrite the PNG if it exists")
     a = p.add_argument_group("aiming the camera (instead of fitting the whole mesh)")
     a.add_argument("--view-dir", default=None, metavar="DX,DY,DZ",
-                   help="direction the camera looks in (replaces --azimuth/--elevation; "
+                   help="direction the camera looks in, the object's up kept vertical "
+                   "(replaces --azimuth/--elevation; "
                    "write --view-dir=-1,0,0 when it starts with a minus); default with "
                    "--frame-*: straight at the region, against its normal")
     a.add_argument("--look-at", default=None, metavar="X,Y,Z",

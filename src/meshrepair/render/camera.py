@@ -1,7 +1,9 @@
 """The renderer's orthographic camera: axes from angles or a view direction, fitting, aiming.
 
-Camera: orthographic, ``azimuth`` rotates about the vertical ``+y`` axis and ``elevation`` tilts
-towards it (degrees); ``azimuth = elevation = 0`` looks from ``+z`` towards ``-z`` with ``+y`` up.
+Camera: orthographic. Without angles or a view direction it shows the object's front with its up
+vertical (:mod:`meshrepair.render.autocam`). ``azimuth`` rotates about the vertical ``+y`` axis
+and ``elevation`` tilts towards it (degrees); ``azimuth = elevation = 0`` looks from ``+z``
+towards ``-z`` with ``+y`` up.
 The view is fitted so that the projected mesh (or the ``fit_bounds`` box, or in
 :func:`compare_figure` the union of all meshes) fills the picture with a 4 % margin.
 A camera can instead be *aimed*: ``view_dir`` (the direction it looks in) replaces the angles,
@@ -67,14 +69,35 @@ def _project(
 
 
 
-def _aim(azimuth, elevation, view_dir, look_at, radius, clip):
-    """Camera axes, the fitted window (None: fit the mesh) and the near clipping depth."""
+def _up_for(view_dir, up: np.ndarray | None) -> np.ndarray | None:
+    """``up`` unless it is (nearly) along ``view_dir`` (then None: view_axes' own choice)."""
+    if up is None:
+        return None
+    d = np.asarray(view_dir, dtype=np.float64).ravel()
+    nd = float(np.linalg.norm(d)) if d.shape == (3,) else 0.0
+    if not (nd > 0 and np.all(np.isfinite(d))) or abs(float(d @ up)) / nd > 0.99:
+        return None
+    return up
+
+
+def _aim(azimuth, elevation, view_dir, look_at, radius, clip, V=None, F=None):
+    """Camera axes, the fitted window (None: fit the mesh) and the near clipping depth.
+
+    Without angles or ``view_dir`` and with a mesh ``(V, F)``, the camera is the object's
+    default view (:func:`meshrepair.render.autocam.default_view`: its front, its up); a given
+    ``view_dir`` keeps the object's up (:func:`~meshrepair.render.autocam.object_up`) so the
+    picture is never upside down. Angles are world angles about ``+y``, as documented."""
     from ..framing import view_axes
+    from .autocam import default_view, object_up
 
     if view_dir is not None:
         if azimuth is not None or elevation is not None:
             raise MeshRepairError("pass either view_dir or azimuth/elevation, not both")
-        axes = view_axes(view_dir)
+        up = object_up(V, F) if V is not None and len(F) else None
+        axes = view_axes(view_dir, _up_for(view_dir, up))
+    elif azimuth is None and elevation is None and V is not None and len(F):
+        d, up = default_view(V, F)
+        axes = view_axes(d, _up_for(d, up))
     else:
         axes = _camera_axes(azimuth or 0.0, elevation or 0.0)
     if look_at is None:

@@ -97,7 +97,8 @@ def compare_figure(
         cats = _categories(np.concatenate(values), mode, categorical, vmin, vmax, cmap)
     cmap = cmap or ("coolwarm" if mode == "curvature" else "viridis")
     _lut(cmap)
-    axes, window, near = _aim(azimuth, elevation, view_dir, look_at, radius, clip_front)
+    axes, window, near = _aim(azimuth, elevation, view_dir, look_at, radius, clip_front,
+                              *checked[0])
     if window is None:
         fitted = checked if fit == "union" else checked[:1]
         wins = np.stack([_view_window(V, axes) for V, _ in fitted])

@@ -73,9 +73,12 @@ def render_mesh(
         Per-vertex mask (faces whose three vertices are inside are tinted blue) or per-face mask
         (those faces are tinted). An array with both lengths is taken per vertex.
     azimuth, elevation : float, optional
-        Camera angles in degrees (rotation about ``+y``, tilt towards ``+y``); ``None`` is 0,
-        i.e. looking from ``+z`` with ``+y`` up. The orthographic view is always fitted to the
-        projected mesh (or to ``fit_bounds``).
+        Camera angles in degrees (rotation about ``+y``, tilt towards ``+y``; ``0, 0`` looks
+        from ``+z`` with ``+y`` up; one given, the other is 0). With neither angle nor
+        ``view_dir`` the camera shows the object's front with its up vertical
+        (:func:`meshrepair.render.autocam.default_view`: from its principal axes and the side
+        its faces look at; deterministic, independent of the vertex order). The orthographic
+        view is always fitted to the projected mesh (or to ``fit_bounds``).
     width, height : int
         Size of the returned image in pixels (title and colour bar included).
     clip_percentile : (lo, hi)
@@ -97,9 +100,9 @@ def render_mesh(
     colorbar_label : str, optional
         Label of the colour bar (default "mean curvature" for curvature colouring).
     view_dir : (3,) float, optional
-        Direction the camera looks in (instead of ``azimuth``/``elevation``); ``(0, 0, -1)``
-        is the default view. Up on the picture is ``+y`` (``-z`` or ``+z`` when looking
-        vertically), see :func:`meshrepair.framing.view_axes`.
+        Direction the camera looks in (instead of ``azimuth``/``elevation``). Up on the
+        picture is the object's up (:func:`meshrepair.render.autocam.object_up`), or, when
+        looking along it, that of :func:`meshrepair.framing.view_axes`.
     look_at : (3,) float, optional
         Point at the centre of the picture; the view is fitted to the sphere of ``radius``
         around it instead of the whole mesh (aim at a region with
@@ -151,7 +154,7 @@ def render_mesh(
     _lut(cmap)  # validate early
     em = _selected_edges(F, len(V), edge_mask)
     hl = _face_highlight(F, len(V), region_mask)
-    axes, window, near = _aim(azimuth, elevation, view_dir, look_at, radius, clip)
+    axes, window, near = _aim(azimuth, elevation, view_dir, look_at, radius, clip, V, F)
     if window is None:
         fit_pts = V if fit_bounds is None else _box_corners(_check_bounds(fit_bounds))
         window = _view_window(fit_pts, axes)
