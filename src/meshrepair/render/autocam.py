@@ -37,6 +37,18 @@ OPEN_RATIO = 0.3
 _WORLD = np.eye(3)
 
 
+def _normalised(V: np.ndarray) -> np.ndarray | None:
+    """``V`` centred on its bounding box and divided by its largest extent (every rule is
+    invariant to both; huge or tiny coordinates then neither overflow nor underflow), or None
+    for a mesh without extent."""
+    V = np.asarray(V, dtype=np.float64)
+    lo, hi = V.min(axis=0), V.max(axis=0)
+    ext = float(np.max(hi - lo))
+    if not (np.isfinite(ext) and ext > 0):
+        return None
+    return (V - 0.5 * (lo + hi)) / ext
+
+
 def _face_data(V: np.ndarray, F: np.ndarray):
     P = V[F]
     n = np.cross(P[:, 1] - P[:, 0], P[:, 2] - P[:, 0]) * 0.5  # area-weighted normals
@@ -51,6 +63,8 @@ def _principal_axes(A: np.ndarray, c: np.ndarray) -> tuple[np.ndarray, np.ndarra
     mu = w @ c
     d = c - mu
     C = (d * w[:, None]).T @ d
+    if not np.all(np.isfinite(C)):
+        return _WORLD.copy(), np.ones(3)
     ev, U = np.linalg.eigh(C)
     order = np.argsort(ev)[::-1]
     return U[:, order].T, np.sqrt(np.maximum(ev[order], 0.0))
@@ -66,7 +80,10 @@ def _signed(v: np.ndarray) -> np.ndarray:
 
 def object_up(V: np.ndarray, F: np.ndarray) -> np.ndarray:
     """The object's up direction (unit, world coordinates); see the module docstring."""
-    n, A, c = _face_data(V, F)
+    V = _normalised(V)
+    if V is None or len(F) == 0:
+        return _WORLD[1].copy()
+    n, A, c = _face_data(V, np.asarray(F, dtype=np.int64))
     total = float(A.sum())
     if not total > 0:
         return _WORLD[1].copy()
@@ -86,9 +103,11 @@ def object_up(V: np.ndarray, F: np.ndarray) -> np.ndarray:
 def default_view(V: np.ndarray, F: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """``(view_dir, up)`` of the default camera (unit vectors, world coordinates): the direction
     the camera looks in and the object's up (see the module docstring)."""
-    V = np.asarray(V, dtype=np.float64)
     F = np.asarray(F, dtype=np.int64)
     up = object_up(V, F)
+    V = _normalised(V)
+    if V is None or len(F) == 0:
+        return np.array([0.0, 0.0, -1.0]), up
     n, A, c = _face_data(V, F)
     total = float(A.sum())
     if not total > 0:
@@ -111,8 +130,8 @@ def default_view(V: np.ndarray, F: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     q = np.c_[c @ b1, c @ b2]
     q -= w @ q
     C2 = (q * w[:, None]).T @ q
-    ev, U = np.linalg.eigh(C2)  # ascending
     s = b1
+    ev, U = np.linalg.eigh(C2) if np.all(np.isfinite(C2)) else (np.ones(2), np.eye(2))
     if ev[1] > DISTINCT * max(ev[0], 1e-300):
         s = _signed(U[0, 0] * b1 + U[1, 0] * b2)
     s = s / np.linalg.norm(s)  # the camera sits on the side +s, looking along -s
