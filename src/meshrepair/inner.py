@@ -24,8 +24,8 @@ STIFF_RATIO = 30.0  # vertices stiffer than this many times the median get a sma
 INNER_SOLVERS = ("armijo", "gd", "heavy_ball", "lbfgs", "bfgs")
 BFGS_MAX_VERTICES = 400
 """Largest mesh ``inner_solver='bfgs'`` accepts: scipy's BFGS keeps a dense (3 nV)² inverse
-Hessian and updates it with dense (3 nV)³ products every iteration (a 520-vertex open sphere
-took minutes per denoise); 'lbfgs' is the solver for larger meshes."""
+Hessian and updates it with dense (3 nV)³ products every iteration (at 500 vertices a denoise
+takes minutes); 'lbfgs' is the solver for larger meshes."""
 
 
 class VSubproblem:

@@ -116,9 +116,8 @@ def _area_switch(max_area: float) -> str:
 STEINER_FACTOR = 20
 """Triangle may add at most this many times the vertices a patch needs at its area bound (the
 polygon's area over the bound, halved, plus one per loop vertex), and at least
-:data:`STEINER_MIN`. On the holes of the unit and shared-mesh hole tests a patch adds at most
-2.25 times that count;
-a polygon that needs far more is a long thin one (a loop through a vertex far from the others):
+:data:`STEINER_MIN`. Measured patches of real holes add at most 2.25 times that count; a
+polygon that needs far more is a long thin one (a loop through a vertex far from the others):
 quality triangles along a sliver of width w and length L need about (L / w)² of them."""
 STEINER_MIN = 10_000
 """Steiner points Triangle may always add (about 20 ms of its work)."""
