@@ -3,9 +3,10 @@
 The kernels are compiled on their first use and kept in numba's on-disk cache, so the first run
 of a command takes seconds longer than the next ones (a denoise of a 544-vertex mesh: 10.5 s
 with an empty cache, 9.9 s of it compiling; 0.35 s with a full one). :class:`CompileClock`
-listens to numba's ``numba:compile`` events, which fire only when a kernel is compiled (not when it is loaded from
-the cache): at the first one it prints a one-line note (the wait that follows is not the repair),
-and it adds up the seconds spent compiling, which the command's summary then states.
+listens to numba's ``numba:compile`` events, which fire only when a kernel is compiled (not when
+it is loaded from the cache): at the first one it prints a one-line note (the wait that follows
+is not the repair), and it adds up the seconds spent compiling, which the command's summary then
+states.
 """
 
 from __future__ import annotations
