@@ -1,0 +1,1 @@
+"""Mesh-level pieces shared by the tasks (below them in the data flow)."""
