@@ -104,7 +104,8 @@ def _expand(value, inp: Path):
 
 
 def _denoise(m, out: Path, opts: dict):
-    from . import denoise, write_mesh
+    from . import denoise
+    from .commands.common import write_like_input
 
     save_mask = opts.pop("save_mask", False)
     r = denoise(m.V, m.F, **opts)
@@ -113,7 +114,7 @@ def _denoise(m, out: Path, opts: dict):
         sharp_v = np.zeros(len(r.V), np.uint8)
         sharp_v[r.edges[r.M_E].ravel()] = 1
         attrs["sharp"] = sharp_v
-    write_mesh(out, r.V, r.F, vertex_attributes=attrs or None)
+    write_like_input(out, m, r, extra=attrs)
     return r.V, r.F, {"noise_estimate": float(r.noise_estimate),
                       "lambda": float(r.params["lam"]), "iterations": int(r.iterations),
                       "stop_reason": r.stop_reason, "sharp_edges": int(r.M_E.sum())}
@@ -127,26 +128,29 @@ def _fill_metrics(res) -> dict:
 
 
 def _fill(m, out: Path, opts: dict):
-    from . import fill_holes, write_mesh
+    from . import fill_holes
+    from .commands.common import write_like_input
 
     res = fill_holes(m.V, m.F, **opts)
-    write_mesh(out, res.V, res.F, vertex_attributes={"filled": res.filled_mask}, overwrite=True)
+    write_like_input(out, m, res, extra={"filled": res.filled_mask})
     return res.V, res.F, _fill_metrics(res)
 
 
 def _inpaint(m, out: Path, opts: dict):
-    from . import inpaint, write_mesh
+    from . import inpaint
+    from .commands.common import write_like_input
     from .commands.fill import resolve_region
 
     region = resolve_region(opts.pop("region", None), opts.pop("attribute", None), len(m.V))
     res = inpaint(m.V, m.F, region, **opts)
-    write_mesh(out, res.V, res.F, vertex_attributes={"filled": res.filled_mask}, overwrite=True)
+    write_like_input(out, m, res, extra={"filled": res.filled_mask})
     return res.V, res.F, _fill_metrics(res)
 
 
 def _complete(m, out: Path, opts: dict):
-    from . import complete, read_mesh, write_mesh
-    from .commands.complete import complete_arguments, output_attributes
+    from . import complete, read_mesh
+    from .commands.common import write_like_input
+    from .commands.complete import complete_arguments, output_attributes, template_vertex_map
 
     tpath = opts.pop("template", None)
     if tpath is None and not opts.get("mirror"):
@@ -155,7 +159,8 @@ def _complete(m, out: Path, opts: dict):
     tmesh = read_mesh(tpath) if tpath is not None else None
     template, kw = complete_arguments(m, tmesh, {**kw, **opts})
     res = complete(m.V, m.F, template=template, **kw)
-    write_mesh(out, res.V, res.F, vertex_attributes=output_attributes(res, out), overwrite=True)
+    write_like_input(out, m, res, extra=output_attributes(res, out), template=tmesh,
+                     template_map=template_vertex_map(tmesh, template, res))
     c = res.correspondence
     return res.V, res.F, {"seam_vertices": int(c["n_seam"]),
                           "rms_boundary_before": float(c["rms_before"]),

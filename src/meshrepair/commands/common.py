@@ -1,4 +1,5 @@
-"""Helpers shared by the CLI sub-commands: safe output paths, progress bars."""
+"""Helpers shared by the CLI sub-commands: safe output paths, writing a result like its input,
+progress bars."""
 
 from __future__ import annotations
 
@@ -162,6 +163,24 @@ def write_json_log(path: str | os.PathLike | None, data: dict, *, force: bool) -
 
     write_json(path, data, overwrite=force)
     print(f"wrote {path}")
+
+
+def write_like_input(out: str | os.PathLike, source, result, *, extra: dict | None = None,
+                     force: bool = True, template=None, template_map=None) -> None:
+    """Write a task's result with everything of its input it does not change.
+
+    The input's attributes are carried over (:func:`meshrepair.io.carry_attributes`: colours,
+    texture coordinates, materials, per-face properties; interpolated on new vertices; normals
+    recomputed) and the file is stored like the input (binary or ASCII, float32 or float64,
+    comments); ``extra`` per-vertex attributes (the command's own masks) are added for a PLY
+    output only. What the output format cannot hold is named in one logged warning.
+    """
+    from ..io import carry_attributes, write_mesh
+
+    like = carry_attributes(source, result, template=template, template_map=template_map)
+    extra = extra if Path(out).suffix.lower() == ".ply" else None
+    write_mesh(out, like.V, like.F, vertex_attributes=extra or None, like=like,
+               overwrite=force)
 
 
 class ProgressBar:

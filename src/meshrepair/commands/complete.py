@@ -115,11 +115,40 @@ def output_attributes(res, out: str | Path) -> dict | None:
     return {"m_v": res.M_V.astype(np.float32), "strip": strip, "template": tmpl}
 
 
+def template_vertex_map(tmesh, template, res) -> np.ndarray | None:
+    """Pairs ``(template file vertex, result vertex)`` for the template's interior vertices.
+
+    The result holds the template's interior vertices in the order of the template's used
+    vertices (after the vertices of the input and those inserted on the seam), then the
+    vertices added by splitting ears (:mod:`meshrepair.complete`); None for a mirror template
+    or when the counts do not agree (the template's values are then interpolated).
+    """
+    from ..topology import boundary_loops
+
+    if tmesh is None or not isinstance(template, tuple):
+        return None
+    F = tmesh.F if len(template) == 2 else tmesh.F[np.asarray(template[2])]
+    used = np.zeros(len(tmesh.V), bool)
+    used[F.ravel()] = True
+    idx = np.flatnonzero(used)
+    loops = boundary_loops((np.cumsum(used) - 1)[F], len(idx))
+    if len(loops) != 1:
+        return None
+    interior = np.ones(len(idx), bool)
+    interior[loops[0]] = False
+    tv, n = res.template_vertices, int(interior.sum())
+    if len(tv) != n + int(res.correspondence.get("ears_split", 0)):
+        log.warning("the template's vertices could not be matched in the result: its "
+                    "attributes are interpolated from the border instead")
+        return None
+    return np.stack([idx[interior], tv[:n]], axis=1)
+
+
 def run_complete(args: argparse.Namespace) -> int:
     """Handler of ``meshrepair complete``; returns the exit code."""
     from ..complete import complete
-    from ..io import read_mesh, write_mesh
-    from .common import ProgressBar, run_outputs, write_json_log
+    from ..io import read_mesh
+    from .common import ProgressBar, run_outputs, write_json_log, write_like_input
 
     paths = list(args.paths)
     if args.mirror:
@@ -146,8 +175,8 @@ def run_complete(args: argparse.Namespace) -> int:
     finally:
         bar.close()
     t_solve = time.perf_counter() - t0 - t_read
-    write_mesh(out, res.V, res.F, vertex_attributes=output_attributes(res, out),
-               overwrite=args.force)
+    write_like_input(out, mesh, res, extra=output_attributes(res, out), force=args.force,
+                     template=tmesh, template_map=template_vertex_map(tmesh, template, res))
     c = res.correspondence
     if log_path is not None:
         corr = {k: (v.tolist() if isinstance(v, np.ndarray) else v) for k, v in c.items()}

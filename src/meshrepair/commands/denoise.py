@@ -18,6 +18,7 @@ from .common import (
     output_path,
     run_outputs,
     write_json_log,
+    write_like_input,
 )
 
 log = logging.getLogger(__name__)
@@ -32,7 +33,7 @@ def _write_history(path: Path | None, result, extra: dict, force: bool) -> None:
 
 def run_denoise(args: argparse.Namespace) -> int:
     from ..denoise import denoise
-    from ..io import read_mesh, write_mesh
+    from ..io import read_mesh
     from ..solver import StopRequested
 
     out, log_path, report_path = run_outputs(args, [args.input], output=args.output)
@@ -62,7 +63,7 @@ def run_denoise(args: argparse.Namespace) -> int:
         sharp_v = np.zeros(len(r.V), np.uint8)
         sharp_v[r.edges[r.M_E].ravel()] = 1
         attrs["sharp"] = sharp_v
-    write_mesh(out, r.V, r.F, vertex_attributes=attrs or None, overwrite=args.force)
+    write_like_input(out, m, r, extra=attrs, force=args.force)
     _write_history(log_path, r, {"seconds": dt}, args.force)
     print(f"denoised {len(r.V)} vertices in {r.iterations} iterations ({dt:.2f} s, "
           f"{r.stop_reason}); noise estimate gamma={r.noise_estimate:.3f}, lambda="
@@ -84,13 +85,15 @@ def run_denoise(args: argparse.Namespace) -> int:
 
 
 def run_noise(args: argparse.Namespace) -> int:
-    from ..io import read_mesh, write_mesh
+    from types import SimpleNamespace
+
+    from ..io import read_mesh
     from ..noise import add_noise
 
     out = output_path(args.output, [args.input], force=args.force)
     m = read_mesh(args.input)
     Vn = add_noise(m.V, m.F, args.gamma, direction=args.direction, seed=args.seed)
-    write_mesh(out, Vn, m.F, overwrite=args.force)
+    write_like_input(out, m, SimpleNamespace(V=Vn, F=m.F), force=args.force)
     print(f"added noise gamma={args.gamma} ({args.direction}, seed {args.seed}); wrote {out}")
     return 0
 

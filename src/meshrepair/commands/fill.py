@@ -7,8 +7,10 @@ Examples
 ``meshrepair fill scan.ply --list``
 ``meshrepair inpaint head.ply head_fixed.ply --sphere 0.1,0.2,0.3,0.05``
 
-The output is written with :func:`meshrepair.io.write_mesh`; a PLY output gets a per-vertex
-``filled`` property (1 on new vertices, 0 elsewhere).
+The output keeps what the input holds (colours, texture coordinates, materials, per-face
+properties, binary/ASCII and precision; interpolated on the new vertices:
+:func:`meshrepair.io.carry_attributes`); a PLY output gets a per-vertex ``filled`` property
+(1 on new vertices, 0 elsewhere).
 """
 
 from __future__ import annotations
@@ -34,11 +36,10 @@ def _floats(text: str, n: int, what: str) -> list[float]:
     return vals
 
 
-def _write(out: Path, res, log_path: Path | None, extra: dict, force: bool) -> None:
-    from ..io import write_mesh
-    from .common import write_json_log
+def _write(out: Path, m, res, log_path: Path | None, extra: dict, force: bool) -> None:
+    from .common import write_json_log, write_like_input
 
-    write_mesh(out, res.V, res.F, vertex_attributes={"filled": res.filled_mask}, overwrite=force)
+    write_like_input(out, m, res, extra={"filled": res.filled_mask}, force=force)
     if log_path is not None:
         data = {
             "history": res.history,
@@ -139,7 +140,7 @@ def _solve_and_write(args: argparse.Namespace, m, paths: tuple, desc: str, solve
         if bar is not None:
             bar.close()
     print(res.summary())
-    _write(out, res, log_path, {"input": args.input}, args.force)
+    _write(out, m, res, log_path, {"input": args.input}, args.force)
     print(f"wrote {out} ({len(res.V)} vertices, {len(res.F)} faces, {res.timings['total']:.2f} s)")
     _report(args, res, m, report_path)
     return 0

@@ -312,4 +312,4 @@ def _warn_dropped(p: Path, like: MeshData | None, vattrs: Mapping, *, materials:
             lost.append(f"materials {like.materials}")
     if lost:
         logger.warning("%s: %s are not stored in %s files (use %s)", p, "; ".join(lost),
-                       p.suffix.lower(), "PLY or OBJ" if p.suffix.lower() != ".ply" else "OBJ")
+                       p.suffix.lower(), "PLY" if p.suffix.lower() != ".ply" else "OBJ")

@@ -150,6 +150,8 @@ def propagate_faces(F: np.ndarray, known: np.ndarray) -> np.ndarray:
             break
         sub = A[todo]
         hit = sub.multiply((src >= 0).astype(np.float64)[None, :]).tocsr()
+        hit.eliminate_zeros()
+        hit.sort_indices()
         rows = np.flatnonzero(np.diff(hit.indptr))
         if rows.size == 0:
             break
