@@ -7,8 +7,9 @@ faces. On the result:
 * original vertices keep their per-vertex values bit for bit, original faces their per-face
   values and per-corner texture coordinates (matched by their vertex triple);
 * normals ``nx, ny, nz`` are recomputed for the new geometry (every vertex);
-* on new vertices, colours, texture coordinates and float properties are interpolated
-  harmonically from the patch border (:func:`meshrepair.mesh.attributes.harmonic_extend`),
+* on new vertices, colours, texture coordinates and float properties are interpolated from the
+  values around the patch by a thin-plate (biharmonic, default) or harmonic fairing
+  (:func:`meshrepair.mesh.attributes.harmonic_extend`, where the equations are),
   integer labels take the value of the nearest original vertex
   (:func:`meshrepair.io.attributes.vertex_kind`), a completion template's own per-vertex
   values are used where the template has them;
@@ -17,7 +18,7 @@ faces. On the result:
 * per-corner texture coordinates (OBJ ``vt``): the corners of new faces at a border vertex use
   that vertex's texture coordinate; where a border vertex has several (a texture seam crosses
   the patch) the most used one is taken and a warning names the vertices; new vertices get new
-  ``vt`` rows interpolated harmonically.
+  ``vt`` rows interpolated the same way.
 """
 
 from __future__ import annotations
@@ -28,7 +29,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import MeshRepairError
-from ..mesh.attributes import harmonic_extend, nearest_known, propagate_faces
+from ..mesh.attributes import METHODS, harmonic_extend, nearest_known, propagate_faces
 from .attributes import NORMAL_NAMES, cast_back, recompute_normals, vertex_kind
 from .common import MeshData
 from .trimesh_visuals import from_trimesh, is_trimesh, to_trimesh
@@ -39,7 +40,8 @@ __all__ = ["carry_attributes"]
 
 
 def carry_attributes(source: Any, result: Any, *, template: MeshData | None = None,
-                     template_map: np.ndarray | None = None) -> Any:
+                     template_map: np.ndarray | None = None,
+                     interpolation: str = "biharmonic") -> Any:
     """The attributes of ``source`` on the repaired mesh ``result`` (module docstring).
 
     Parameters
@@ -56,6 +58,9 @@ def carry_attributes(source: Any, result: Any, *, template: MeshData | None = No
         A completion template with attributes of its own.
     template_map : (k, 2) int array, optional
         Pairs ``(template vertex, result vertex)`` for ``template``.
+    interpolation : {"biharmonic", "harmonic"}
+        How values on new vertices follow the values around them
+        (:mod:`meshrepair.mesh.attributes`).
 
     Returns
     -------
@@ -66,7 +71,11 @@ def carry_attributes(source: Any, result: Any, *, template: MeshData | None = No
     if is_trimesh(source):
         material = getattr(getattr(source.visual, "material", None), "copy", lambda: None)()
         return to_trimesh(carry_attributes(from_trimesh(source), result, template=template,
-                                           template_map=template_map), material=material)
+                                           template_map=template_map,
+                                           interpolation=interpolation), material=material)
+    if interpolation not in METHODS:
+        raise MeshRepairError(f"interpolation must be one of {', '.join(METHODS)}, got "
+                              f"{interpolation!r}")
     if not isinstance(source, MeshData):
         raise MeshRepairError("carry_attributes needs the source as a MeshData (read_mesh) or a "
                               f"trimesh.Trimesh, got {type(source).__name__}")
@@ -88,7 +97,7 @@ def carry_attributes(source: Any, result: Any, *, template: MeshData | None = No
     known = orig >= 0
     face_src = _match_faces(source.F, F, orig)
 
-    vattrs = _vertex_values(source, V, F, orig, known, template, template_map)
+    vattrs = _vertex_values(source, V, F, orig, known, template, template_map, interpolation)
     out = MeshData(V=V, F=F, vertex_attributes=vattrs, path=None,
                    materials=list(source.materials),
                    material_libraries=list(source.material_libraries),
@@ -104,7 +113,8 @@ def carry_attributes(source: Any, result: Any, *, template: MeshData | None = No
     if source.face_materials is not None:
         out.face_materials = np.where(ok, source.face_materials[np.maximum(from_face, 0)], -1)
     if source.texcoords is not None and source.face_texcoords is not None:
-        out.texcoords, out.face_texcoords = _corner_uvs(source, V, F, orig, face_src)
+        out.texcoords, out.face_texcoords = _corner_uvs(source, V, F, orig, face_src,
+                                                        interpolation)
     return out
 
 
@@ -136,7 +146,7 @@ def _keys(T: np.ndarray) -> np.ndarray:
 
 def _vertex_values(source: MeshData, V: np.ndarray, F: np.ndarray, orig: np.ndarray,
                    known: np.ndarray, template: MeshData | None,
-                   template_map: np.ndarray | None) -> dict[str, np.ndarray]:
+                   template_map: np.ndarray | None, method: str) -> dict[str, np.ndarray]:
     names = list(source.vertex_attributes)
     out: dict[str, np.ndarray] = {}
     groups: dict[tuple[bool, str], list[str]] = {}
@@ -170,7 +180,8 @@ def _vertex_values(source: MeshData, V: np.ndarray, F: np.ndarray, orig: np.ndar
             for n in group:
                 out[n][~given] = out[n][near[~given]]
             continue
-        X = harmonic_extend(V, F, np.stack([out[n].astype(np.float64) for n in group], 1), given)
+        X = harmonic_extend(V, F, np.stack([out[n].astype(np.float64) for n in group], 1), given,
+                            method)
         for k, n in enumerate(group):
             out[n][~given] = cast_back(X[~given, k], out[n].dtype)
     if all(n in out for n in NORMAL_NAMES):
@@ -179,7 +190,7 @@ def _vertex_values(source: MeshData, V: np.ndarray, F: np.ndarray, orig: np.ndar
 
 
 def _corner_uvs(source: MeshData, V: np.ndarray, F: np.ndarray, orig: np.ndarray,
-                face_src: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+                face_src: np.ndarray, method: str) -> tuple[np.ndarray, np.ndarray]:
     """Per-corner texture coordinates of the result: kept faces keep theirs; the corners of
     the other faces use their vertex's (interpolated for new vertices, appended to the table)."""
     T0, TC0 = source.texcoords, source.face_texcoords
@@ -227,7 +238,7 @@ def _corner_uvs(source: MeshData, V: np.ndarray, F: np.ndarray, orig: np.ndarray
         if not have.any():
             logger.warning("no texture coordinates around the new faces: they get none")
         else:
-            uv = harmonic_extend(V, F, uv, have)
+            uv = harmonic_extend(V, F, uv, have, method)
     new_rows = np.flatnonzero(todo) if have.any() else np.empty(0, np.int64)
     vt_of[new_rows] = len(T0) + np.arange(len(new_rows))
     table = np.vstack([T0, uv[new_rows]])

@@ -2,19 +2,23 @@
 
 A repair (hole filling, inpainting, completion) keeps the original vertices and adds new ones
 inside patches; per-vertex values such as colours or texture coordinates are known on the
-original vertices and unknown on the new ones. They are extended by **harmonic
-interpolation**: with ``L`` the Laplacian of the output mesh, the unknown values ``x_u`` solve
+original vertices and unknown on the new ones. They are extended by the same kind of fairing
+the geometry gets, with ``L = D^-1 (D - W)`` the normalised Laplacian of the output mesh
+(``W`` edge weights, ``D`` their row sums):
 
-    L_uu x_u = -L_uk x_k,
+* ``"biharmonic"`` (default): ``(L^2)_uu x_u = -(L^2)_uk x_k``, the unknown values ``x_u``
+  solve the thin-plate equation ``L^2 x = 0`` on the patch with the known values ``x_k`` of
+  two rings around it fixed: values *and* their slope across the border continue into the
+  patch, so a smooth field (a colour gradient) is followed rather than flattened. The result is
+  clipped to the range of the known values (a thin plate may overshoot);
+* ``"harmonic"``: ``L_uu x_u = -L_uk x_k`` (the border values only): each new value is a
+  convex combination of its neighbours', so it never leaves the border's range, but a field is
+  flattened towards the border's average in a large patch.
 
-the known values ``x_k`` held fixed (a Dirichlet problem on each patch, its border values given
-by the surrounding surface). The weights are the cotangent weights
-``w_ij = (cot a_ij + cot b_ij) / 2`` clamped at 0, plus a small uniform weight ``eps * mean(w)``
-so that every patch vertex is linked to its neighbours even across degenerate triangles. With
-non-negative weights each new value is a convex combination of its neighbours' values: the
-result stays within the range of the border values (a colour never leaves the border's colour
-range), and a field that is linear in the surface's (flat) parameterisation is reproduced
-exactly on a flat patch.
+Both reproduce a field that is linear in the surface's (flat) parameterisation on a flat patch.
+The weights are the cotangent weights ``w_ij = (cot a_ij + cot b_ij) / 2`` clamped at 0, plus a
+small uniform weight ``eps * mean(w)`` so that every patch vertex is linked to its neighbours
+even across degenerate triangles.
 
 Per-face values (materials, face properties) on new faces are taken from a neighbouring face
 that has one: a breadth-first walk over edge-adjacent faces from the kept faces
@@ -29,7 +33,9 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
-__all__ = ["harmonic_weights", "harmonic_extend", "propagate_faces", "nearest_known"]
+__all__ = ["METHODS", "harmonic_weights", "harmonic_extend", "propagate_faces", "nearest_known"]
+
+METHODS = ("biharmonic", "harmonic")
 
 _EPS_UNIFORM = 1e-3
 
@@ -64,8 +70,8 @@ def harmonic_weights(V: np.ndarray, F: np.ndarray) -> sp.csr_matrix:
 
 
 def harmonic_extend(V: np.ndarray, F: np.ndarray, values: np.ndarray,
-                    known: np.ndarray) -> np.ndarray:
-    """Extend values given on the ``known`` vertices harmonically to the others.
+                    known: np.ndarray, method: str = "biharmonic") -> np.ndarray:
+    """Extend values given on the ``known`` vertices to the others (module docstring).
 
     Parameters
     ----------
@@ -74,14 +80,17 @@ def harmonic_extend(V: np.ndarray, F: np.ndarray, values: np.ndarray,
     values : (nV,) or (nV, k) float
         Read on the known rows only.
     known : (nV,) bool
+    method : {"biharmonic", "harmonic"}
 
     Returns
     -------
     (nV,) or (nV, k) float64
-        ``values`` on the known rows; on the others the solution of ``L_uu x_u = -L_uk x_k``
-        (module docstring). An unknown vertex in a component without any known vertex gets the
-        mean of all known values (there is nothing around it to interpolate from).
+        ``values`` on the known rows; on the others the solution of the biharmonic or harmonic
+        equation (module docstring). An unknown vertex in a component without any known vertex
+        gets the mean of all known values (there is nothing around it to interpolate from).
     """
+    if method not in METHODS:
+        raise ValueError(f"method must be one of {METHODS}, got {method!r}")
     vals = np.asarray(values, dtype=np.float64)
     flat = vals.ndim == 1
     X = vals.reshape(len(vals), -1).copy()
@@ -92,21 +101,47 @@ def harmonic_extend(V: np.ndarray, F: np.ndarray, values: np.ndarray,
     if not known.any():
         X[unk] = 0.0
         return X[:, 0] if flat else X
+    # only the unknown vertices and three rings of faces around them take part
+    V = np.asarray(V, dtype=np.float64)
+    F = np.asarray(F, dtype=np.int64)
+    near = ~known
+    for _ in range(3):
+        near = near.copy()
+        near[F[near[F].any(axis=1)].ravel()] = True
+    Fs = F[near[F].all(axis=1)]  # complete rings: the rows of L and L^2 used are exact
+    sub = np.flatnonzero(near)
+    local = np.full(len(V), -1, np.int64)
+    local[sub] = np.arange(len(sub))
+    Xs = _extend_local(V[sub], local[Fs], X[sub], known[sub], method, X[known])
+    X[sub] = Xs
+    return X[:, 0] if flat else X
+
+
+def _extend_local(V: np.ndarray, F: np.ndarray, X: np.ndarray, known: np.ndarray, method: str,
+                  X_all_known: np.ndarray) -> np.ndarray:
+    X = X.copy()
+    unk = np.flatnonzero(~known)
+    kn = np.flatnonzero(known)
     W = harmonic_weights(V, F)
     deg = np.asarray(W.sum(axis=1)).ravel()
-    kn = np.flatnonzero(known)
-    W_uu = W[unk][:, unk]
-    W_uk = W[unk][:, kn]
-    reach = _reaches_known(W_uu, np.asarray(W_uk.sum(axis=1)).ravel() > 0)
-    X[unk] = X[kn].mean(axis=0)
+    reach = _reaches_known(W[unk][:, unk], np.asarray(W[unk][:, kn].sum(axis=1)).ravel() > 0)
+    X[unk] = X_all_known.mean(axis=0)
     if reach.any():
-        u = np.flatnonzero(reach)
-        A = (sp.diags(deg[unk][u]) - W_uu[u][:, u]).tocsc()
-        rhs = W_uk[u] @ X[kn]
         from scipy.sparse.linalg import splu
 
-        X[unk[u]] = splu(A).solve(np.asarray(rhs))
-    return X[:, 0] if flat else X
+        u = unk[reach]
+        if method == "harmonic":
+            A = (sp.diags(deg[u]) - W[u][:, u]).tocsc()
+            rhs = W[u][:, kn] @ X[kn]
+            X[u] = splu(A).solve(np.asarray(rhs))
+        else:
+            L = (sp.eye(len(V)) - sp.diags(1.0 / np.maximum(deg, 1e-300)) @ W).tocsr()
+            rows = (L[u] @ L).tocsr()
+            A = rows[:, u].tocsc()
+            rhs = -(rows[:, kn] @ X[kn])
+            X[u] = np.clip(splu(A).solve(np.asarray(rhs)), X_all_known.min(axis=0),
+                           X_all_known.max(axis=0))
+    return X
 
 
 def _reaches_known(W_uu: sp.csr_matrix, touches: np.ndarray) -> np.ndarray:
