@@ -19,9 +19,9 @@ import numpy as np
 import plyfile
 import pytest
 
+from meshrepair.batch.jobs import run_job
 from meshrepair.cli import main
 from meshrepair.io import MeshData, carry_attributes, read_mesh, write_mesh
-from meshrepair.jobs import run_job
 
 from .test_fill import compact, cut_disc
 
@@ -55,7 +55,7 @@ def _write_ply(path: Path, vert: np.ndarray, face: np.ndarray, text: bool,
 
 
 def make_coloured(path: Path, V, F) -> None:
-    from meshrepair.geometry import vertex_normals
+    from meshrepair.mesh.geometry import vertex_normals
 
     N = vertex_normals(V, F)
     C = np.rint(colour_field(V) * 255).astype(np.uint8)
@@ -203,7 +203,7 @@ def test_coloured_float32_ply(files, base, tmp_path, cmd, runner):
         assert len(tv) > 0 and (r.vertex_attributes["blue"][tv] == 250).all()
     else:
         assert (r.vertex_attributes["alpha"] == 200).all()
-    from meshrepair.geometry import vertex_normals
+    from meshrepair.mesh.geometry import vertex_normals
 
     N = np.stack([r.vertex_attributes[n] for n in ("nx", "ny", "nz")], axis=1)
     assert N.dtype == np.float32
@@ -287,7 +287,7 @@ def test_textured_obj_with_materials(files, base, tmp_path, cmd, runner):
 
 def test_seam_across_a_hole_is_named(tmp_path, base, caplog):
     import meshrepair as mr
-    from meshrepair.topology import boundary_loops
+    from meshrepair.mesh.topology import boundary_loops
 
     V, F, _, _ = base
     loop = boundary_loops(F, len(V))[0]

@@ -29,10 +29,9 @@ Every failure raises :class:`~meshrepair.errors.MeshRepairError` naming the file
 
 Modules (one per format, as trimesh's ``exchange/``): :mod:`.ply`, :mod:`.obj`, :mod:`.off`,
 :mod:`.stl`; :mod:`.common` (:class:`MeshData`, :func:`check_input_file`, shared parse helpers),
-:mod:`.arrays` (:func:`as_arrays`), :mod:`.masks` (:func:`read_vertex_mask`),
-:mod:`.attributes` (:class:`FileFormat`, kinds of attributes, precision rule), :mod:`.carry`
-(:func:`carry_attributes`), :mod:`.trimesh_visuals` (:func:`from_trimesh`,
-:func:`to_trimesh`). This module
+:mod:`.masks` (:func:`read_vertex_mask`), :mod:`.attributes` (:class:`FileFormat`, kinds of
+attributes, precision rule), :mod:`.carry` (:func:`carry_attributes`),
+:mod:`.trimesh_visuals` (:func:`from_trimesh`, :func:`to_trimesh`). This module
 dispatches :func:`read_mesh` and :func:`write_mesh` on the file extension.
 """
 
@@ -44,19 +43,18 @@ from pathlib import Path
 
 import numpy as np
 
-from ..array_contract import _as_face_array, _as_vertex_array
-from ..atomic import atomic_write, check_writable
-from ..errors import MeshRepairError
-from .arrays import as_arrays
-from .attributes import FileFormat, coordinate_dtype, uv_pair
-from .carry import carry_attributes
-from .common import MeshData, PathLike, _Bad, _fail_read, _suffix, check_input_file
-from .masks import read_vertex_mask
-from .obj import _read_obj, _write_obj
-from .off import _read_off, _write_off
-from .ply import _ply_attr_columns, _read_ply, _write_ply
-from .stl import _read_stl, _write_stl
-from .trimesh_visuals import from_trimesh, to_trimesh
+from meshrepair.atomic import atomic_write, check_writable
+from meshrepair.errors import MeshRepairError
+from meshrepair.io.attributes import FileFormat, coordinate_dtype, uv_pair
+from meshrepair.io.carry import carry_attributes
+from meshrepair.io.common import MeshData, PathLike, _Bad, _fail_read, _suffix, check_input_file
+from meshrepair.io.masks import read_vertex_mask
+from meshrepair.io.obj import _read_obj, _write_obj
+from meshrepair.io.off import _read_off, _write_off
+from meshrepair.io.ply import _ply_attr_columns, _read_ply, _write_ply
+from meshrepair.io.stl import _read_stl, _write_stl
+from meshrepair.io.trimesh_visuals import from_trimesh, to_trimesh
+from meshrepair.mesh.array_contract import _as_face_array, _as_vertex_array, as_arrays
 
 logger = logging.getLogger(__name__)
 
@@ -71,6 +69,7 @@ __all__ = [
     "read_mesh",
     "read_vertex_mask",
     "to_trimesh",
+    "write_like_input",
     "write_mesh",
 ]
 
@@ -253,6 +252,23 @@ def write_mesh(
             _write_off(fh, Vf, Fi, kept)
     logger.debug("wrote %s: %d vertices, %d faces", p, nV, len(Fi))
     return p
+
+
+def write_like_input(out: PathLike, source: object, result: object, *, extra: dict | None = None,
+                     force: bool = True, template: MeshData | None = None,
+                     template_map: np.ndarray | None = None) -> None:
+    """Write a task's result with everything of its input it does not change.
+
+    The input's attributes are carried over (:func:`meshrepair.io.carry_attributes`: colours,
+    texture coordinates, materials, per-face properties; interpolated on new vertices; normals
+    recomputed) and the file is stored like the input (binary or ASCII, float32 or float64,
+    comments); ``extra`` per-vertex attributes (the command's own masks) are added for a PLY
+    output only. What the output format cannot hold is named in one logged warning.
+    """
+    like = carry_attributes(source, result, template=template, template_map=template_map)
+    extra = extra if Path(out).suffix.lower() == ".ply" else None
+    write_mesh(out, like.V, like.F, vertex_attributes=extra or None, like=like,
+               overwrite=force)
 
 
 def _obj_vertex_keeps(vattrs: Mapping[str, np.ndarray]) -> set[str]:

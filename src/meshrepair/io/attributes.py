@@ -95,7 +95,7 @@ def recompute_normals(attrs: dict, V: np.ndarray, F: np.ndarray) -> None:
     (V, F), in the stored dtype."""
     if not all(n in attrs for n in NORMAL_NAMES):
         return
-    from ..geometry import vertex_normals
+    from meshrepair.mesh.geometry import vertex_normals
 
     N = vertex_normals(np.asarray(V, np.float64), np.asarray(F, np.int64))
     for k, n in enumerate(NORMAL_NAMES):

@@ -1,4 +1,5 @@
-"""Carry a file's attributes over to a repaired mesh: :func:`carry_attributes`.
+"""Carry a file's attributes over to a repaired mesh: :func:`carry_attributes` (a result is
+written like its input with :func:`meshrepair.io.write_like_input`).
 
 Every task keeps the original vertices it does not remove, in their order (``vertex_map``
 gives their new index), and the original faces it does not remove; it adds new vertices and
@@ -28,11 +29,11 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import MeshRepairError
-from ..mesh.attributes import METHODS, harmonic_extend, nearest_known, propagate_faces
-from .attributes import NORMAL_NAMES, cast_back, recompute_normals, vertex_kind
-from .common import MeshData
-from .trimesh_visuals import from_trimesh, is_trimesh, to_trimesh
+from meshrepair.errors import MeshRepairError
+from meshrepair.io.attributes import NORMAL_NAMES, cast_back, recompute_normals, vertex_kind
+from meshrepair.io.common import MeshData
+from meshrepair.io.trimesh_visuals import from_trimesh, is_trimesh, to_trimesh
+from meshrepair.mesh.attributes import METHODS, harmonic_extend, nearest_known, propagate_faces
 
 logger = logging.getLogger("meshrepair.io")
 

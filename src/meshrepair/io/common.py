@@ -12,8 +12,8 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import MeshRepairError
-from .attributes import FileFormat
+from meshrepair.errors import MeshRepairError
+from meshrepair.io.attributes import FileFormat
 
 logger = logging.getLogger("meshrepair.io")
 

@@ -18,8 +18,15 @@ from typing import Any
 
 import numpy as np
 
-from .attributes import FileFormat, uv_pair
-from .common import MeshData, _Bad, _check_indices, _fan_triangulate, _parse_floats, _read_text
+from meshrepair.io.attributes import FileFormat, uv_pair
+from meshrepair.io.common import (
+    MeshData,
+    _Bad,
+    _check_indices,
+    _fan_triangulate,
+    _parse_floats,
+    _read_text,
+)
 
 logger = logging.getLogger("meshrepair.io")
 

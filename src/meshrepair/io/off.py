@@ -16,8 +16,8 @@ from typing import Any
 
 import numpy as np
 
-from .attributes import FileFormat
-from .common import (
+from meshrepair.io.attributes import FileFormat
+from meshrepair.io.common import (
     MeshData,
     _Bad,
     _check_indices,

@@ -13,8 +13,8 @@ from typing import Any
 
 import numpy as np
 
-from .attributes import uv_pair
-from .common import MeshData
+from meshrepair.io.attributes import uv_pair
+from meshrepair.io.common import MeshData
 
 __all__ = ["from_trimesh", "to_trimesh", "is_trimesh"]
 

@@ -31,7 +31,6 @@ interpolated are in :mod:`meshrepair.io.carry`.
 from __future__ import annotations
 
 import numpy as np
-import scipy.sparse as sp
 
 __all__ = ["METHODS", "harmonic_weights", "harmonic_extend", "propagate_faces", "nearest_known"]
 
@@ -40,9 +39,11 @@ METHODS = ("biharmonic", "harmonic")
 _EPS_UNIFORM = 1e-3
 
 
-def harmonic_weights(V: np.ndarray, F: np.ndarray) -> sp.csr_matrix:
+def harmonic_weights(V: np.ndarray, F: np.ndarray):
     """Symmetric (nV, nV) edge weights: cotangent weights clamped at 0 plus a small uniform
     part (``1e-3`` of their mean) on every edge."""
+    import scipy.sparse as sp
+
     V = np.asarray(V, dtype=np.float64)
     F = np.asarray(F, dtype=np.int64)
     nV = len(V)
@@ -119,6 +120,8 @@ def harmonic_extend(V: np.ndarray, F: np.ndarray, values: np.ndarray,
 
 def _extend_local(V: np.ndarray, F: np.ndarray, X: np.ndarray, known: np.ndarray, method: str,
                   X_all_known: np.ndarray) -> np.ndarray:
+    import scipy.sparse as sp
+
     X = X.copy()
     unk = np.flatnonzero(~known)
     kn = np.flatnonzero(known)
@@ -144,7 +147,7 @@ def _extend_local(V: np.ndarray, F: np.ndarray, X: np.ndarray, known: np.ndarray
     return X
 
 
-def _reaches_known(W_uu: sp.csr_matrix, touches: np.ndarray) -> np.ndarray:
+def _reaches_known(W_uu, touches: np.ndarray) -> np.ndarray:
     """Unknown vertices connected (through unknown vertices) to one touching a known vertex."""
     from scipy.sparse.csgraph import connected_components
 
@@ -167,6 +170,8 @@ def propagate_faces(F: np.ndarray, known: np.ndarray) -> np.ndarray:
     -------
     (nF,) int64
     """
+    import scipy.sparse as sp
+
     F = np.asarray(F, dtype=np.int64)
     nF = len(F)
     src = np.where(np.asarray(known, bool), np.arange(nF), -1).astype(np.int64)
