@@ -8,6 +8,7 @@ Public API::
     r = fill_holes(V, F)       # closes holes; r.holes is a per-hole report
     r = inpaint(V, F, region)  # removes a damaged region and refills it
     r = complete(V, F, faces, (V_P, F_P))   # grafts a template patch and blends it
+    out = carry_attributes(read_mesh(p), r)  # the file's colours, UVs, materials on the result
 """
 
 import sys as _sys
@@ -24,7 +25,7 @@ _LAZY = {
     "MeshRepairError": "errors",
     "FillResult": "fill", "fill_holes": "fill", "inpaint": "fill",
     "find_holes": "holes",
-    "read_mesh": "io", "write_mesh": "io",
+    "read_mesh": "io", "write_mesh": "io", "carry_attributes": "io", "write_like_input": "io",
     "distances": "metrics", "msae": "metrics", "mean_angle_error": "metrics",
     "vertex_error": "metrics",
     "add_noise": "model.noise", "estimate_noise": "model.noise",
@@ -130,7 +131,9 @@ __all__ = [
     "msae",
     "mean_angle_error",
     "read_mesh",
+    "carry_attributes",
     "vertex_error",
+    "write_like_input",
     "write_mesh",
 ]
 __version__ = "0.1.0"

@@ -129,9 +129,9 @@ def _match_faces(F0: np.ndarray, F: np.ndarray, orig: np.ndarray) -> np.ndarray:
     cand = np.flatnonzero((G >= 0).all(axis=1))
     if cand.size == 0:
         return src
-    k0 = _keys(np.sort(F0, axis=1))
+    both = _keys(np.sort(np.vstack([F0, G[cand]]), axis=1))
+    k0, k = both[:len(F0)], both[len(F0):]
     order = np.argsort(k0, kind="stable")
-    k = _keys(np.sort(G[cand], axis=1))
     pos = np.searchsorted(k0[order], k)
     pos = np.minimum(pos, len(k0) - 1)
     hit = k0[order][pos] == k
@@ -140,8 +140,12 @@ def _match_faces(F0: np.ndarray, F: np.ndarray, orig: np.ndarray) -> np.ndarray:
 
 
 def _keys(T: np.ndarray) -> np.ndarray:
-    """One comparable key per sorted index triple."""
+    """One comparable key per sorted index triple: ``(a * n + b) * n + c`` in int64 when it
+    fits (n < 2**21), else a structured view (slower to sort)."""
     T = np.ascontiguousarray(T, dtype=np.int64)
+    n = int(T.max()) + 1 if T.size else 1
+    if n < 1 << 21:
+        return (T[:, 0] * n + T[:, 1]) * n + T[:, 2]
     return T.view([("a", np.int64), ("b", np.int64), ("c", np.int64)]).ravel()
 
 
