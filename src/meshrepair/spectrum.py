@@ -64,10 +64,13 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.optimize import nnls
 
-BANDS = (1, 2, 4, 8, 16, 32, 64)
+BANDS = (1, 2, 4, 8, 16, 32)
 """Diffusion times ``t`` of the band-passes ``W^t (I - W^t)^2`` (wavelength ≈ √t edges)."""
-CANDIDATE_STEPS = (0, 1, 2, 4, 8, 16, 32, 64)
-"""Diffusion steps ``m`` of the noise models (correlation length ``√m`` edges)."""
+CANDIDATE_STEPS = (0, 1, 2, 4, 8, 16)
+"""Diffusion steps ``m`` of the noise models (correlation length ``√m`` edges): those whose band
+gains peak within :data:`BANDS`. A longer correlation reads as ``ℓ̂ = 4`` with the level of its
+part within the bands (the rising edge of a longer model's gains looks like relief and cannot be
+told from it)."""
 RELIEF_POWERS = tuple(np.round(np.arange(0.0, 3.01, 0.25), 2))
 """Exponents ``b`` of the relief model ``a (t/t_0)^b``."""
 QUANTILE = 0.1
