@@ -29,8 +29,8 @@ import numpy as np  # noqa: E402
 
 DESIGN = ("fandisk", "nicolo", "spot")
 CHECK = ("trim_star", "bunny", "rocker_arm", "twelve", "camelhead")
-KINDS = ("normal:0.05", "normal:0.2", "normal:0.5", "random:0.2", "random:0.5",
-         "corr4:0.3", "corr4:0.6", "corr16:0.3", "corr16:0.6", "corr64:0.6")
+KINDS = ("normal:0.05", "normal:0.2", "normal:0.5", "random:0.05", "random:0.2", "random:0.5",
+         "corr4:0.3", "corr4:0.6", "corr8:0.6", "corr16:0.3", "corr16:0.6", "corr64:0.6")
 
 
 def noisy(V, F, kind: str, seed: int):

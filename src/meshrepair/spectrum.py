@@ -35,8 +35,8 @@ random walk with ``m`` steps per side). Its band readings are ``e_t = σ g_t(m)`
 .. math:: g_t(m) = \\sqrt{Q_q\\big(W^{2t} (H_t W^m Z)^2\\big)} / \\mathrm{std}(W^m Z) ,
 
 computed once, by :func:`band_gains`, on a periodic regular triangular grid (valence 6, no
-boundary, seeded probes): a table that does not depend on the input, so the reading is exactly
-invariant to the vertex order. The gains of the umbrella walk on the meshes' own connectivity
+boundary, seeded probes): a table that does not depend on the input, so no random probe follows the
+vertex order. The gains of the umbrella walk on the meshes' own connectivity
 differ by a few per cent (irregular valence).
 
 **Fit.** The surface adds a relief ``r_t ≥ 0`` that grows with the band's scale; it is modelled
@@ -51,8 +51,19 @@ non-negative amplitudes ``(σ², a²)`` minimise the relative squared misfit
 (``m = 0``) over the misfit of the best one: 1 when white noise explains the spectrum as well as
 any correlated model, large when it does not.
 
+**Mean edge length.** Noise along the normals lengthens the edges (``E‖d‖² = l² + 2σ²`` for
+white noise), so ``l̄`` is the mean length of the edges projected on the tangent planes of
+``W^4 V`` (:func:`tangent_edge_length`).
+
+**Range and limits.** Lengths are read up to 4 edges (:data:`CANDIDATE_STEPS`); the level is that
+of the quietest part of the surface (the quantile), which is the RMS for stationary noise and
+less for noise whose strength varies over the surface. Where the surface's own relief at a
+band's scale exceeds the noise there (correlations of several edges on a coarse organic mesh)
+the noise cannot be told from the shape and is under-read.
+
 Everything is in mean-edge-length units and invariant to rotation, uniform scale and the vertex
-order; the reading is deterministic.
+order (up to rounding: sums over a vertex's neighbours in another order); the reading is
+deterministic.
 """
 
 from __future__ import annotations
