@@ -92,7 +92,8 @@ is the sampling scale itself, which the mesh cannot tell from white noise."""
 MIN_SAMPLES = 64
 """A band is read only where at least this many vertices lie beyond its boundary margin."""
 LENGTH_STEPS = 4
-"""Diffusion steps of the surface whose normals give the tangent planes of the edge length."""
+"""Diffusion steps of the surface whose normals give the tangent planes of the edge length (one
+of :data:`BANDS`, whose chain passes there)."""
 GRID_SIZE = 160
 """Side of the periodic calibration grid (25,600 vertices)."""
 
@@ -213,6 +214,24 @@ def tangent_edge_length(d: np.ndarray, normals: np.ndarray, edges: np.ndarray) -
     return float(np.linalg.norm(d, axis=1).mean())
 
 
+def _bands_of(W, X: np.ndarray, ts):
+    """Yield ``(t, W^t X, H_t X)`` for the ascending times ``ts``, walking the chain
+    ``X, WX, W²X, ...`` once and keeping only the powers a later band still needs."""
+    todo = sorted(ts)
+    keep: dict[int, np.ndarray] = {}
+    P = X
+    for j in range(3 * todo[-1] + 1):
+        if j:
+            P = W @ P
+        if any(j in (t, 2 * t) for t in todo):
+            keep[j] = P
+        while todo and 3 * todo[0] == j:
+            t = todo.pop(0)
+            yield t, keep[t], keep[t] - 2.0 * keep[2 * t] + P
+            for k in [k for k in keep if not any(k in (s, 2 * s) for s in todo)]:
+                del keep[k]
+
+
 def band_energies(V: np.ndarray, F: np.ndarray, field: np.ndarray | None = None):
     """The band readings ``e_t`` of the module docstring; with ``field`` (nV,) the readings of
     that scalar field on the mesh (``u_t = H_t field``: a known displacement without the relief).
@@ -230,28 +249,27 @@ def band_energies(V: np.ndarray, F: np.ndarray, field: np.ndarray | None = None)
     edges = topo.edges
     n = len(V)
     W = umbrella_operator(edges, n)
-    P = _powers(W, V, _needed(BANDS) | {LENGTH_STEPS})
-    lbar = tangent_edge_length(V[edges[:, 1]] - V[edges[:, 0]],
-                               vertex_normals(P[LENGTH_STEPS], F), edges)
     bnd = np.zeros(n, bool)
     bnd[edges[topo.boundary].ravel()] = True
     hops = _boundary_hops(edges, bnd, n)
     used = np.zeros(n, bool)
     used[F.ravel()] = True
+    X = V if field is None else np.asarray(field, dtype=np.float64)
     ts, e = [], []
-    for t in BANDS:
+    nl = None
+    for t, Pt, h in _bands_of(W, X, BANDS):
+        if field is None and t == LENGTH_STEPS:
+            nl = vertex_normals(Pt, F)
         mask = used & (hops > 3.0 * np.sqrt(5.0 * t))  # beyond the band's support (5t steps)
         if mask.sum() < MIN_SAMPLES:
             continue
-        if field is None:
-            h = P[t] - 2.0 * P[2 * t] + P[3 * t]
-            u = np.einsum("ij,ij->i", h, vertex_normals(P[t], F))
-        else:
-            Q = _powers(W, np.asarray(field, dtype=np.float64), {t, 2 * t, 3 * t})
-            u = Q[t] - 2.0 * Q[2 * t] + Q[3 * t]
+        u = h if field is not None else np.einsum("ij,ij->i", h, vertex_normals(Pt, F))
         ts.append(t)
-        e.append(np.sqrt(_local_quantile(W, u * u, t, mask)) / lbar)
-    return tuple(ts), np.asarray(e), lbar
+        e.append(np.sqrt(_local_quantile(W, u * u, t, mask)))
+    if nl is None:
+        nl = vertex_normals(_powers(W, V, {LENGTH_STEPS})[LENGTH_STEPS], F)
+    lbar = tangent_edge_length(V[edges[:, 1]] - V[edges[:, 0]], nl, edges)
+    return tuple(ts), np.asarray(e) / lbar, lbar
 
 
 def fit_spectrum(ts, e: np.ndarray):
