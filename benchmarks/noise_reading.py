@@ -1,4 +1,4 @@
-"""The noise reading (:func:`meshrepair.spectrum.read_noise`) on noise of known level and length.
+"""The noise reading (:func:`meshrepair.denoise.analysis.spectrum.read_noise`) on known noise.
 
 On shared clean meshes: white Gaussian noise along the normals and in random directions
 (``add_noise``) and correlated noise along the normals (``scale.correlated_noise``: ``m``
@@ -36,7 +36,7 @@ KINDS = ("normal:0.05", "normal:0.2", "normal:0.5", "random:0.05", "random:0.2",
 def noisy(V, F, kind: str, seed: int):
     """``(V_noisy, true_length)`` for a kind ``normal:γ``, ``random:γ`` or ``corrM:γ``."""
     from meshrepair import add_noise
-    from meshrepair.scale import correlated_noise
+    from meshrepair.denoise.scale import correlated_noise
 
     name, g = kind.split(":")
     if name in ("normal", "random"):
@@ -46,7 +46,7 @@ def noisy(V, F, kind: str, seed: int):
 
 
 def true_level(Vn, V, F) -> float:
-    from meshrepair.geometry import mean_edge_length, vertex_normals
+    from meshrepair.mesh.geometry import mean_edge_length, vertex_normals
 
     h = np.einsum("ij,ij->i", Vn - V, vertex_normals(V, F))
     return float(np.sqrt(np.mean(h * h)) / mean_edge_length(V, F))
@@ -54,8 +54,8 @@ def true_level(Vn, V, F) -> float:
 
 def _smoothed(x, F, steps: int):
     """``W^steps x`` with the umbrella averaging ``W`` of the reading."""
-    from meshrepair.spectrum import umbrella_operator
-    from meshrepair.topology import edge_topology
+    from meshrepair.denoise.analysis.spectrum import umbrella_operator
+    from meshrepair.mesh.topology import edge_topology
 
     W = umbrella_operator(edge_topology(F, len(x)).edges, len(x))
     for _ in range(steps):
@@ -79,7 +79,7 @@ def row(mesh, kind, lvl, length, r, dt) -> str:
 
 def main(argv=None) -> None:
     from meshrepair import read_mesh
-    from meshrepair.spectrum import read_noise
+    from meshrepair.denoise.analysis.spectrum import read_noise
 
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--meshes", nargs="+", default=list(DESIGN + CHECK))
@@ -119,7 +119,7 @@ def main(argv=None) -> None:
         Vn, F, _ = C.read(noisy_name)
         Vt = read_mesh(C.mesh_path(truth)).V
         lvl = true_level(Vn, Vt, F)
-        from meshrepair.geometry import mean_edge_length, vertex_normals
+        from meshrepair.mesh.geometry import mean_edge_length, vertex_normals
 
         nt = vertex_normals(Vt, F)
         eta = np.einsum("ij,ij->i", Vn - Vt, nt)

@@ -1,5 +1,6 @@
-"""The noise reading across scales (:mod:`meshrepair.spectrum`): the band-pass maths, the reading
-of synthetic noise of known level and correlation length, invariances and determinism."""
+"""The noise reading across scales (:mod:`meshrepair.denoise.analysis.spectrum`): the band-pass
+maths, the reading of synthetic noise of known level and correlation length, invariances and
+determinism."""
 
 from __future__ import annotations
 
@@ -9,10 +10,7 @@ import numpy as np
 import pytest
 
 from meshrepair import add_noise, read_mesh
-from meshrepair.errors import MeshRepairError
-from meshrepair.geometry import mean_edge_length, vertex_normals
-from meshrepair.scale import correlated_noise
-from meshrepair.spectrum import (
+from meshrepair.denoise.analysis.spectrum import (
     BANDS,
     CANDIDATE_STEPS,
     band_gains,
@@ -21,6 +19,9 @@ from meshrepair.spectrum import (
     tangent_edge_length,
     umbrella_operator,
 )
+from meshrepair.denoise.scale import correlated_noise
+from meshrepair.errors import MeshRepairError
+from meshrepair.mesh.geometry import mean_edge_length, vertex_normals
 
 DATA = Path(__file__).parent / "data"
 
@@ -75,7 +76,7 @@ def test_gains_peak_at_the_noise_scale():
 def test_tangent_edge_length_ignores_normal_noise():
     """Noise along the normals lengthens edges by √(1 + 2γ²); the tangent projection does not."""
     V, F = _mesh("spot")
-    from meshrepair.topology import edge_topology
+    from meshrepair.mesh.topology import edge_topology
 
     e = edge_topology(F, len(V)).edges
     lbar = mean_edge_length(V, F)

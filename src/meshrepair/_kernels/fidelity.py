@@ -1,4 +1,4 @@
-"""Kernel of the tangential anchor (:func:`meshrepair.fidelity.tangential_anchor`): the
+"""Kernel of the tangential anchor (:func:`meshrepair.model.fidelity.tangential_anchor`): the
 area-weighted vertex normals of ``V`` and the removal of the weighted tangential part of
 ``V - V⁰`` in one face pass and one vertex pass, with no numpy temporaries (it runs after every
 V-step on CAD regions; 104 → 65 µs of CPU per call on a 4,610-vertex mesh, where the numpy
@@ -12,11 +12,11 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._jit import HAVE_NUMBA, njit
+from meshrepair._kernels._jit import HAVE_NUMBA, njit
 
 
 def _np_tangential_anchor(V, V0, F, weight):
-    from .faces import _np_vertex_normals
+    from meshrepair._kernels.faces import _np_vertex_normals
 
     n = _np_vertex_normals(V, F)
     d = V - V0
@@ -25,7 +25,7 @@ def _np_tangential_anchor(V, V0, F, weight):
 
 
 if HAVE_NUMBA:
-    from .faces import _tri
+    from meshrepair._kernels.faces import _tri
 
     @njit(cache=True)
     def _anchor_vertex(V, V0, vn, s, v, w, out):  # pragma: no cover - compiled

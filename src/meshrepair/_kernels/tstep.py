@@ -3,7 +3,7 @@
 Per ADMM iteration the solver needs, on the interior edges,
 ``t = prox(D N + ρ_1 / β_1)`` with the prox of (22)-(23) per edge class: the MC firm
 thresholding with ``a`` on sharp edges (M_E), with ``a_f`` on the flat-TV edges of
-:mod:`meshrepair.priors`, the Willmore shrinkage ``(β_1 D N + ρ_1) / (β_1 + 2 w)`` elsewhere.
+:mod:`meshrepair.model.priors`, the Willmore shrinkage ``(β_1 D N + ρ_1) / (β_1 + 2 w)`` elsewhere.
 Done separately (``grad_edges``, then ``t_update`` or ``t_update_mixed``) that is two edge passes
 with a ``(nE, 3)`` temporary ``DN`` between them and, for the flat class, numpy gathers.
 :func:`t_from_normals` is one pass with no temporary.
@@ -20,8 +20,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._jit import HAVE_NUMBA, njit
-from .edges import _np_grad_edges
+from meshrepair._kernels._jit import HAVE_NUMBA, njit
+from meshrepair._kernels.edges import _np_grad_edges
 
 
 def prox_constants(a: float, beta1: float, w: float) -> tuple[float, float, float]:
@@ -34,7 +34,7 @@ def prox_constants(a: float, beta1: float, w: float) -> tuple[float, float, floa
 
 
 def _np_t_from_normals(N, l, fa, fb, rho1, sharp, flat, a, a_flat, beta1, w):
-    from .priors import _np_t_update_mixed
+    from meshrepair._kernels.priors import _np_t_update_mixed
 
     return _np_t_update_mixed(_np_grad_edges(N, l, fa, fb), rho1, sharp, flat, a, a_flat, beta1,
                               w)

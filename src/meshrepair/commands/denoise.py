@@ -11,7 +11,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .common import (
+from meshrepair.commands.common import (
     ProgressBar,
     make_folder,
     output_folder,
@@ -31,9 +31,9 @@ def _write_history(path: Path | None, result, extra: dict, force: bool) -> None:
 
 
 def run_denoise(args: argparse.Namespace) -> int:
-    from ..denoise import denoise
-    from ..io import read_mesh, write_mesh
-    from ..solver import StopRequested
+    from meshrepair.denoise.api import denoise
+    from meshrepair.io import read_mesh, write_mesh
+    from meshrepair.model.solver import StopRequested
 
     out, log_path, report_path = run_outputs(args, [args.input], output=args.output)
     m = read_mesh(args.input)
@@ -71,7 +71,7 @@ def run_denoise(args: argparse.Namespace) -> int:
         print("interrupted: wrote the current iterate", file=sys.stderr)
     print(f"wrote {out}")
     if report_path is not None:
-        from ..report import write_report
+        from meshrepair.report.page import write_report
 
         write_report(report_path, title=f"meshrepair denoise {Path(args.input).name}",
                      input_mesh=(m.V, m.F), output_mesh=(r.V, r.F),
@@ -84,8 +84,8 @@ def run_denoise(args: argparse.Namespace) -> int:
 
 
 def run_noise(args: argparse.Namespace) -> int:
-    from ..io import read_mesh, write_mesh
-    from ..noise import add_noise
+    from meshrepair.io import read_mesh, write_mesh
+    from meshrepair.model.noise import add_noise
 
     out = output_path(args.output, [args.input], force=args.force)
     m = read_mesh(args.input)
@@ -96,7 +96,7 @@ def run_noise(args: argparse.Namespace) -> int:
 
 
 def _metrics(V, F, Vr, Fr) -> dict:
-    from ..metrics import distances, msae, vertex_error
+    from meshrepair.metrics import distances, msae, vertex_error
 
     d = distances(V, F, Vr, Fr)
     out = {}
@@ -111,7 +111,7 @@ def _metrics(V, F, Vr, Fr) -> dict:
 
 
 def run_metrics(args: argparse.Namespace) -> int:
-    from ..io import read_mesh
+    from meshrepair.io import read_mesh
 
     a, b = read_mesh(args.result), read_mesh(args.reference)
     vals = _metrics(a.V, a.F, b.V, b.F)
@@ -128,9 +128,9 @@ def run_metrics(args: argparse.Namespace) -> int:
 def run_demo(args: argparse.Namespace) -> int:
     from importlib.resources import files
 
-    from ..denoise import denoise
-    from ..io import read_mesh, write_mesh
-    from ..metrics import msae, vertex_error
+    from meshrepair.denoise.api import denoise
+    from meshrepair.io import read_mesh, write_mesh
+    from meshrepair.metrics import msae, vertex_error
 
     data = files("meshrepair") / "data"
     names = ["fandisk_denoised.ply"] + ([] if args.no_render else ["fandisk_demo.png"])
@@ -157,7 +157,7 @@ def run_demo(args: argparse.Namespace) -> int:
     print(f"  wrote {out}")
     if not args.no_render:
         try:
-            from ..render import compare_figure
+            from meshrepair.render import compare_figure
 
             compare_figure([(noisy.V, noisy.F), (r.V, r.F), (truth.V, truth.F)],
                            ["noisy", "meshrepair", "ground truth"],

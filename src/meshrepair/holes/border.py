@@ -26,8 +26,8 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from ._geom2d import _vector_area
-from .detect import Hole
+from meshrepair.holes._geom2d import _vector_area
+from meshrepair.holes.detect import Hole
 
 BORDER_AREA_RATIO = 0.5
 """A loop whose vector area is at least this fraction of its component's area is a border."""
@@ -69,7 +69,7 @@ def find_borders(V: np.ndarray, F: np.ndarray, holes: Sequence[Hole]) -> dict[in
     """
     if not holes:
         return {}
-    from ..topology import connected_components
+    from meshrepair.mesh.topology import connected_components
 
     _, comp = connected_components(F, len(V))
     areas = component_areas(V, F, comp)

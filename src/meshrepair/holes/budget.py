@@ -14,8 +14,8 @@ from collections.abc import Iterable
 
 import numpy as np
 
-from ..errors import MeshRepairError
-from .detect import Hole
+from meshrepair.errors import MeshRepairError
+from meshrepair.holes.detect import Hole
 
 MAX_NEW_FACES = 2_000_000
 """Largest number of new faces (estimated) fill_holes / inpaint agree to create in one call

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .crease_ends import (
+from meshrepair.holes.crease_ends import (
     CHAIN_PER_GAP,
     CORNER_TOL,
     MIN_CORNER,
@@ -198,7 +198,7 @@ def _kinked_pairs(P: np.ndarray, ends: list[CreaseEnd]) -> list[tuple[int, int]]
     third crease was not found (fandisk creases r=16), not one crease. Routed straight:
     on trim_star crease r=8 the crease arriving at one end bends by 58° there (its chain
     outside zigzags by 15-30° per edge), while inside the hole it turns by 24° in all."""
-    from ._geom2d import _vector_area
+    from meshrepair.holes._geom2d import _vector_area
 
     va = _vector_area(P)
     nva = float(np.linalg.norm(va))
@@ -209,7 +209,7 @@ def _kinked_pairs(P: np.ndarray, ends: list[CreaseEnd]) -> list[tuple[int, int]]
     if nh is not None:
         from matplotlib.path import Path as MPath
 
-        from .planar import _plane_frame
+        from meshrepair.holes._geom2d import _plane_frame
 
         e1, e2 = _plane_frame(-nh)
         Q = np.c_[(P - P.mean(axis=0)) @ e1, (P - P.mean(axis=0)) @ e2]

@@ -137,8 +137,8 @@ class SharpGraph:
     """Sharp edges of a mesh (dihedral angle above ``th``) as an adjacency structure."""
 
     def __init__(self, V: np.ndarray, F: np.ndarray, th: float):
-        from ..geometry import dihedral_angles, face_normals
-        from ..topology import edge_topology
+        from meshrepair.mesh.geometry import dihedral_angles, face_normals
+        from meshrepair.mesh.topology import edge_topology
 
         topo = edge_topology(F, len(V))
         N = face_normals(V, F)

@@ -45,7 +45,7 @@ import logging
 
 import numpy as np
 
-from .crease_corners import (  # noqa: F401  (re-exported)
+from meshrepair.holes.crease_corners import (  # noqa: F401  (re-exported)
     EXACT_CORNER_ARM,
     EXACT_CORNER_TOL,
     KINKED_PAIR_TURN,
@@ -57,7 +57,7 @@ from .crease_corners import (  # noqa: F401  (re-exported)
     _lines_meet_ahead,
     _twin_corners,
 )
-from .crease_ends import (  # noqa: F401  (re-exported)
+from meshrepair.holes.crease_ends import (  # noqa: F401  (re-exported)
     CHAIN_PER_GAP,
     CORNER_TOL,
     MAX_CHAIN,
@@ -116,7 +116,7 @@ def route_creases(V: np.ndarray, loop: np.ndarray, ends: list[CreaseEnd]) -> Cre
                 continue
             if min(ca, cb) > cos_turn:
                 cand.append((ca + cb, a, b))
-    from ._geom2d import _vector_area
+    from meshrepair.holes._geom2d import _vector_area
 
     va = _vector_area(P)
     nva = float(np.linalg.norm(va))

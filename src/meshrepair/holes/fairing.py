@@ -6,9 +6,14 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
-from ..errors import MeshRepairError
-from ._fairing_common import _barycentric_areas, _free_mask, _laplacian, _usable_rows
-from ._geom2d import _cotan_weights_2d
+from meshrepair.errors import MeshRepairError
+from meshrepair.holes._fairing_common import (
+    _barycentric_areas,
+    _free_mask,
+    _laplacian,
+    _usable_rows,
+)
+from meshrepair.holes._geom2d import _cotan_weights_2d
 
 LIEPA_COT_RANGE = (0.3, 3.0)
 """Cotangent bounds (angles 18.4°-73.3°) of the thin-plate fairing of patches enclosed by

@@ -9,8 +9,8 @@ import logging
 import numpy as np
 import scipy.sparse as sp
 
-from ..errors import MeshRepairError
-from ._geom2d import (
+from meshrepair.errors import MeshRepairError
+from meshrepair.holes._geom2d import (
     MIN_ANGLE,
     Patch,
     _area_switch,
@@ -18,7 +18,7 @@ from ._geom2d import (
     _orient_patch,
     _polygon_is_simple,
 )
-from .liepa import min_weight_triangulation
+from meshrepair.holes.liepa import min_weight_triangulation
 
 log = logging.getLogger(__name__)
 
@@ -277,7 +277,7 @@ def _mean_value_layout(S: np.ndarray, T: np.ndarray, k: int) -> np.ndarray:
     Positive weights and a convex boundary make it a valid (fold-free) layout."""
     from scipy.sparse.linalg import spsolve
 
-    from ..topology import boundary_loops
+    from meshrepair.mesh.topology import boundary_loops
 
     n = len(S)
     bl = boundary_loops(T, n)

@@ -29,8 +29,13 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
-from ._fairing_common import _barycentric_areas, _free_mask, _laplacian, _usable_rows
-from ._geom2d import _cotan_weights_2d
+from meshrepair.holes._fairing_common import (
+    _barycentric_areas,
+    _free_mask,
+    _laplacian,
+    _usable_rows,
+)
+from meshrepair.holes._geom2d import _cotan_weights_2d
 
 SCREEN = 0.05
 """Weight of the thin-plate term ``SCREEN Σ_i (A_i / h²) |y_i|²`` added to the energy (``h`` the

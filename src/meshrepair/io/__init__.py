@@ -23,7 +23,7 @@ Every failure raises :class:`~meshrepair.errors.MeshRepairError` naming the file
 
 Modules (one per format, as trimesh's ``exchange/``): :mod:`.ply`, :mod:`.obj`, :mod:`.off`,
 :mod:`.stl`; :mod:`.common` (:class:`MeshData`, :func:`check_input_file`, shared parse helpers),
-:mod:`.arrays` (:func:`as_arrays`), :mod:`.masks` (:func:`read_vertex_mask`). This module
+:mod:`.masks` (:func:`read_vertex_mask`). This module
 dispatches :func:`read_mesh` and :func:`write_mesh` on the file extension.
 """
 
@@ -35,16 +35,15 @@ from pathlib import Path
 
 import numpy as np
 
-from ..array_contract import _as_face_array, _as_vertex_array
-from ..atomic import atomic_write, check_writable
-from ..errors import MeshRepairError
-from .arrays import as_arrays
-from .common import MeshData, PathLike, _Bad, _fail_read, _suffix, check_input_file
-from .masks import read_vertex_mask
-from .obj import _read_obj, _write_obj
-from .off import _read_off, _write_off
-from .ply import _ply_attr_columns, _read_ply, _write_ply
-from .stl import _read_stl, _write_stl
+from meshrepair.atomic import atomic_write, check_writable
+from meshrepair.errors import MeshRepairError
+from meshrepair.io.common import MeshData, PathLike, _Bad, _fail_read, _suffix, check_input_file
+from meshrepair.io.masks import read_vertex_mask
+from meshrepair.io.obj import _read_obj, _write_obj
+from meshrepair.io.off import _read_off, _write_off
+from meshrepair.io.ply import _ply_attr_columns, _read_ply, _write_ply
+from meshrepair.io.stl import _read_stl, _write_stl
+from meshrepair.mesh.array_contract import _as_face_array, _as_vertex_array, as_arrays
 
 logger = logging.getLogger(__name__)
 

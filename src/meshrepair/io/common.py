@@ -12,7 +12,7 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import MeshRepairError
+from meshrepair.errors import MeshRepairError
 
 logger = logging.getLogger("meshrepair.io")
 

@@ -13,7 +13,14 @@ from typing import Any
 
 import numpy as np
 
-from .common import MeshData, _Bad, _check_indices, _fan_triangulate, _parse_floats, _read_text
+from meshrepair.io.common import (
+    MeshData,
+    _Bad,
+    _check_indices,
+    _fan_triangulate,
+    _parse_floats,
+    _read_text,
+)
 
 
 def _read_obj(path: Path) -> MeshData:

@@ -13,7 +13,7 @@ from typing import Any
 
 import numpy as np
 
-from .common import (
+from meshrepair.io.common import (
     MeshData,
     _Bad,
     _check_indices,

@@ -18,8 +18,8 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import MeshRepairError
-from .common import MeshData, _Bad, _undercount
+from meshrepair.errors import MeshRepairError
+from meshrepair.io.common import MeshData, _Bad, _undercount
 
 logger = logging.getLogger("meshrepair.io")
 

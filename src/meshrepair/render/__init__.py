@@ -35,15 +35,15 @@ Modules
 
 from __future__ import annotations
 
-from .camera import _camera_axes as _camera_axes
-from .colour import _MASK_COLOURS as _MASK_COLOURS
-from .colour import _categories as _categories
-from .colour import _lut as _lut
-from .colour import _robust_range as _robust_range
-from .compare import compare_figure
-from .mesh import MAX_RASTER_PIXELS as MAX_RASTER_PIXELS
-from .mesh import render_mesh
-from .png import render_to_file, save_png
+from meshrepair.render.camera import _camera_axes as _camera_axes
+from meshrepair.render.colour import _MASK_COLOURS as _MASK_COLOURS
+from meshrepair.render.colour import _categories as _categories
+from meshrepair.render.colour import _lut as _lut
+from meshrepair.render.colour import _robust_range as _robust_range
+from meshrepair.render.compare import compare_figure
+from meshrepair.render.mesh import MAX_RASTER_PIXELS as MAX_RASTER_PIXELS
+from meshrepair.render.mesh import render_mesh
+from meshrepair.render.png import render_to_file, save_png
 
 __all__ = [
     "compare_figure",
