@@ -8,9 +8,10 @@ random directions ``γ/√3``), the true length ``√m`` (0 for white noise). Ra
 a row passes when the level ratio is within [0.75, 1.25] and, for correlated noise, the length
 ratio within [1/1.5, 1.5] (for white noise: read as not correlated, ``ℓ̂ ≤ 1`` edge).
 
-Then the real inputs with a truth (the noisy/ and published/ Kinect pyramid: the true level is
-measured from the displacement, its length read from the pure displacement field laid on the
-truth) and the real scan (no truth)::
+Then every shared noisy input with a truth (noisy/ and published/, among them the real Kinect
+pyramid: the true level is measured from the displacement, with its part finer than ``W^32``, and
+the length is read from the pure displacement field laid on the truth) and the real scan (no
+truth)::
 
     python benchmarks/noise_reading.py                        # design + check meshes
     python benchmarks/noise_reading.py --meshes fandisk --kinds corr4:0.5
@@ -109,13 +110,13 @@ def main(argv=None) -> None:
         print(f"{mesh} ({split}): {sum(oks)}/{len(oks)} rows pass")
     if args.no_real:
         return
-    print("\nreal inputs\n")
+    print("\nshared noisy inputs with a truth, and the real scan\n")
     print("| input | true normal level (part finer than W^32) | ℓ read on the pure displacement "
           "| read level | read ℓ | level ratio | white evidence |")
     print("|---|---:|---:|---:|---:|---:|---:|", flush=True)
-    for noisy_name, truth in (("noisy/kinect_pyramid__kinect_real", "kinect_pyramid"),
-                              ("published/tgv_kinect_pyramid__noisy",
-                               "published/tgv_kinect_pyramid__truth")):
+    from jitter import cases
+
+    for _, noisy_name, truth in cases():
         Vn, F, _ = C.read(noisy_name)
         Vt = read_mesh(C.mesh_path(truth)).V
         lvl = true_level(Vn, Vt, F)
