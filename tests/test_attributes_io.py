@@ -115,3 +115,12 @@ def test_carry_refuses_a_result_of_another_mesh():
 
     with pytest.raises(MeshRepairError, match="fewer than the source"):
         carry_attributes(m, SimpleNamespace(V=V[:10], F=F[:2]))
+
+
+def test_stl_keeps_binary_or_ascii(tmp_path):
+    V, F = _grid(3)
+    a = write_mesh(tmp_path / "a.stl", V, F, binary=False)
+    m = read_mesh(a)
+    assert m.file_format is not None and not m.file_format.binary
+    out = write_mesh(tmp_path / "b.stl", m.V, m.F, like=m)
+    assert out.read_bytes().startswith(b"solid")
