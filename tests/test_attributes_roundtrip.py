@@ -365,3 +365,24 @@ def test_batch_command_on_dask_writes_what_the_single_command_writes(files, tmp_
         ref = tmp_path / f"ref_{name}"
         assert main(["fill", str(src / name), str(ref), "-q"]) == 0
         assert (out / name).read_bytes() == ref.read_bytes(), name
+
+
+def test_cli_names_a_seam_once(tmp_path, base, capsys):
+    """The CLI prints the texture-seam warning once (logging's handler on stderr), naming the
+    border vertices, and still writes the file."""
+    from meshrepair.mesh.topology import boundary_loops
+
+    V, F, _, _ = base
+    loop = boundary_loops(F, len(V))[0]
+    inp = make_textured(tmp_path, V, F, seam_x=float(V[loop, 0].mean()))
+    out = tmp_path / "out.obj"
+    root = logging.getLogger()
+    handler = logging.StreamHandler()
+    root.addHandler(handler)
+    try:
+        assert main(["fill", str(inp), str(out), "-q"]) == 0
+    finally:
+        root.removeHandler(handler)
+    err = capsys.readouterr().err
+    assert err.count("texture seam crosses a repaired patch") == 1
+    assert read_mesh(out).face_texcoords is not None
