@@ -1,4 +1,4 @@
-"""The noise reading (:func:`meshrepair.denoise.analysis.spectrum.read_noise`) on known noise.
+"""The noise reading (:func:`meshrepair.denoise.spectrum.read_noise`) on known noise.
 
 On shared clean meshes: white Gaussian noise along the normals and in random directions
 (``add_noise``) and correlated noise along the normals (``scale.correlated_noise``: ``m``
@@ -55,7 +55,7 @@ def true_level(Vn, V, F) -> float:
 
 def _smoothed(x, F, steps: int):
     """``W^steps x`` with the umbrella averaging ``W`` of the reading."""
-    from meshrepair.denoise.analysis.spectrum import umbrella_operator
+    from meshrepair.denoise.spectrum import umbrella_operator
     from meshrepair.mesh.topology import edge_topology
 
     W = umbrella_operator(edge_topology(F, len(x)).edges, len(x))
@@ -80,7 +80,7 @@ def row(mesh, kind, lvl, length, r, dt) -> str:
 
 def main(argv=None) -> None:
     from meshrepair import read_mesh
-    from meshrepair.denoise.analysis.spectrum import read_noise
+    from meshrepair.denoise.spectrum import read_noise
 
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--meshes", nargs="+", default=list(DESIGN + CHECK))

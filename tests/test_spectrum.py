@@ -1,4 +1,4 @@
-"""The noise reading across scales (:mod:`meshrepair.denoise.analysis.spectrum`): the band-pass
+"""The noise reading across scales (:mod:`meshrepair.denoise.spectrum`): the band-pass
 maths, the reading of synthetic noise of known level and correlation length, invariances and
 determinism."""
 
@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from meshrepair import add_noise, read_mesh
-from meshrepair.denoise.analysis.spectrum import (
+from meshrepair.denoise.spectrum import (
     BANDS,
     CANDIDATE_STEPS,
     band_gains,
