@@ -11,6 +11,7 @@ then the largest and the median of ``|change|``.
     python benchmarks/jitter.py --quick            # three cases (CAD, organic, real Kinect)
     python benchmarks/jitter.py                    # every noisy and published case
     python benchmarks/jitter.py --only fandisk --eps 1e-8 --seed 3 --out table.md
+    python benchmarks/jitter.py --decisions 0.5    # + the params that moved where |change| > 0.5 %
 
 The machine's memory probe is printed with the table (benchmarks/_common.py).
 """
@@ -64,10 +65,31 @@ def run(case, noisy, truth, eps: float, seed: int) -> dict:
     if not np.array_equal(F, Ft):
         raise SystemExit(f"{noisy} and {truth} do not share faces")
     t = time.perf_counter()
-    m0 = msae(denoise(Vn, F).V, Vt, F)
-    m1 = msae(denoise(jitter(Vn, eps, seed), F).V, Vt, F)
+    r0 = denoise(Vn, F)
+    r1 = denoise(jitter(Vn, eps, seed), F)
+    m0, m1 = msae(r0.V, Vt, F), msae(r1.V, Vt, F)
     return {"case": case, "nV": len(Vn), "msae": m0, "msae_jitter": m1,
-            "change": m1 / m0 - 1.0, "time_s": time.perf_counter() - t}
+            "change": m1 / m0 - 1.0, "time_s": time.perf_counter() - t,
+            "moved": moved_params(r0.params, r1.params)}
+
+
+def moved_params(p0: dict, p1: dict, rel: float = 1e-3) -> dict:
+    """The scalar entries of ``params`` that differ by more than ``rel`` (relative) between the
+    two runs, ``{name: (value, jittered value)}``: the decisions that sit on a knife edge."""
+    out = {}
+    for k in sorted(set(p0) & set(p1)):
+        a, b = p0[k], p1[k]
+        if isinstance(a, bool) or isinstance(b, bool) or isinstance(a, str):
+            if a != b:
+                out[k] = (a, b)
+        elif isinstance(a, (int, float)) and isinstance(b, (int, float)):
+            if abs(a - b) > rel * max(abs(a), abs(b), 1e-12):
+                out[k] = (a, b)
+    return out
+
+
+def _fmt(x) -> str:
+    return f"{x:.4g}" if isinstance(x, float) else str(x)
 
 
 def main(argv=None) -> None:
@@ -77,6 +99,8 @@ def main(argv=None) -> None:
     ap.add_argument("--eps", type=float, default=1e-10, help="jitter / bounding-box diagonal")
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--out", help="also write the markdown table to this file")
+    ap.add_argument("--decisions", type=float, default=None, metavar="PCT",
+                    help="list the params that moved (> 0.1 %%) for cases whose |change| > PCT %%")
     args = ap.parse_args(argv)
     if not (np.isfinite(args.eps) and args.eps > 0):
         raise SystemExit("--eps must be a positive finite number")
@@ -103,6 +127,12 @@ def main(argv=None) -> None:
     a = np.abs([r["change"] for r in rows])
     tail = ["", f"|change|: max {100 * a.max():.3f} % ({rows[int(a.argmax())]['case']}), "
             f"median {100 * np.median(a):.3f} % over {len(rows)} cases"]
+    if args.decisions is not None:
+        tail.append("")
+        for r in rows:
+            if abs(r["change"]) * 100 > args.decisions:
+                moved = ", ".join(f"{k} {_fmt(a)} -> {_fmt(b)}" for k, (a, b) in r["moved"].items())
+                tail.append(f"{r['case']} ({100 * r['change']:+.2f} %): {moved or 'none'}")
     for line in tail:
         print(line, flush=True)
     if args.out:

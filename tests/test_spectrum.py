@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 
 from meshrepair import add_noise, read_mesh
+from meshrepair.denoise.scale import correlated_noise
 from meshrepair.denoise.spectrum import (
     BANDS,
     CANDIDATE_STEPS,
@@ -19,7 +20,6 @@ from meshrepair.denoise.spectrum import (
     tangent_edge_length,
     umbrella_operator,
 )
-from meshrepair.denoise.scale import correlated_noise
 from meshrepair.errors import MeshRepairError
 from meshrepair.mesh.geometry import mean_edge_length, vertex_normals
 
