@@ -2,8 +2,8 @@
 
 The full Taubin low-passes of :mod:`meshrepair.denoise.presmooth` (on the input) and
 :mod:`meshrepair.denoise.coarse` (on the result) move every vertex towards its neighbours'
-centroid, along the surface as well as across it. The shape they reach is what wins MSAE; the tangential
-part of the move is what costs E_V: it slides the vertices along the surface towards the
+centroid, along the surface as well as across it. The shape they reach is what wins MSAE; the
+tangential part of the move is what costs E_V: it slides the vertices along the surface towards the
 umbrella operator's preferred (uniform) layout, away from the input's. For noise along the
 normals the input's layout *is* the truth's, and the filter turns a tangential error of 0 into
 0.17-0.32 mean edge lengths, about twice the normal error left.

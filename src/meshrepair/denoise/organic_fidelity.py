@@ -99,13 +99,13 @@ def organic_lambda(gamma: float, tangential: float = 0.0, *,
 
 
 def tangential_gain(tangential: float) -> float:
-    """``g(r_t)`` of the module docstring: 1 below :data:`meshrepair.denoise.rules.TANGENTIAL_MAX` (noise
-    along the normals) and for ``0.65 ≤ r_t ≤ 1`` (random-direction noise at moderate level
-    reads 0.86-1.22), ``(1 + r_t²) / 2`` above 1: where the tangential part of the input's
-    high-passed umbrella residual dominates its normal part (low random-direction noise on an
-    irregular layout reads up to about 2.3), up to :data:`GAIN_RATIO_MAX` (``g ≤ 3.625``); a
-    ratio above it is not a measurement and, like a NaN ratio (no probe), gives 1 (the
-    ungraded law)."""
+    """``g(r_t)`` of the module docstring: 1 below
+    :data:`meshrepair.denoise.rules.TANGENTIAL_MAX` (noise along the normals) and for ``0.65 ≤
+    r_t ≤ 1`` (random-direction noise at moderate level reads 0.86-1.22), ``(1 + r_t²) / 2``
+    above 1: where the tangential part of the input's high-passed umbrella residual dominates
+    its normal part (low random-direction noise on an irregular layout reads up to about 2.3),
+    up to :data:`GAIN_RATIO_MAX` (``g ≤ 3.625``); a ratio above it is not a measurement and,
+    like a NaN ratio (no probe), gives 1 (the ungraded law)."""
     from meshrepair.denoise.rules import TANGENTIAL_MAX
 
     r = float(tangential)
