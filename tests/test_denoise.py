@@ -248,7 +248,7 @@ def test_direct_and_iterative_backends_agree(spot):
 def test_locality_reordering_maps_back_exactly(spot, monkeypatch):
     import sys
 
-    dmod = sys.modules["meshrepair.denoise.run"]  # where the run reads it
+    dmod = sys.modules["meshrepair.denoise.analysis"]  # where the plan reads it
 
     V, F = spot
     Vn = add_noise(V, F, 0.2, seed=9)

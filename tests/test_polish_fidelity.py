@@ -155,7 +155,8 @@ def test_polish_data_term_on_the_reordered_path(monkeypatch):
     V, F = np.asarray(box.vertices, float), np.asarray(box.faces, np.int64)
     Vn = add_noise(V, F, 0.6, seed=3)
     r = denoise(Vn, F)
-    monkeypatch.setattr(importlib.import_module("meshrepair.denoise.run"), "REORDER_MIN_VERTICES",
+    monkeypatch.setattr(importlib.import_module("meshrepair.denoise.analysis"),
+                        "REORDER_MIN_VERTICES",
                         0)
     r2 = denoise(Vn, F)
     assert r2.params["reordered"] and r2.params["polished"] > 0

@@ -35,6 +35,13 @@ def run_denoise(args: argparse.Namespace) -> int:
     from meshrepair.io import read_mesh, write_mesh
     from meshrepair.model.solver import StopRequested
 
+    if args.explain:
+        return _explain(args)
+    if args.output is None:
+        from meshrepair.errors import MeshRepairError
+
+        raise MeshRepairError("denoise needs an OUTPUT mesh (or --explain to print the plan "
+                              "and write nothing)")
     out, log_path, report_path = run_outputs(args, [args.input], output=args.output)
     m = read_mesh(args.input)
     total = (args.robust_iters if args.robust_iters is not None else 40) + args.feature_iters
@@ -80,6 +87,23 @@ def run_denoise(args: argparse.Namespace) -> int:
                      metrics={"noise estimate": r.noise_estimate, "iterations": r.iterations},
                      timings={"total s": dt}, overwrite=args.force)
         print(f"wrote {report_path}")
+    return 0
+
+
+def _explain(args: argparse.Namespace) -> int:
+    """``denoise IN --explain``: the plan of the call, printed; nothing is written."""
+    from meshrepair.denoise.api import plan_denoise
+    from meshrepair.errors import MeshRepairError
+    from meshrepair.io import read_mesh
+
+    given = [n for n in ("output", "log", "report") if getattr(args, n, None)]
+    if given:
+        raise MeshRepairError(f"--explain writes nothing: drop {', '.join(given)}")
+    m = read_mesh(args.input)
+    t0 = time.perf_counter()
+    plan = plan_denoise(m.V, m.F, **denoise_options(args, output=False))
+    print(plan.explain())
+    print(f"(read and planned in {time.perf_counter() - t0:.2f} s; nothing written)")
     return 0
 
 
@@ -209,8 +233,13 @@ def register(subparsers) -> None:
                     "need no tuning: the noise level is estimated and every parameter is relative "
                     "to the mean edge length. Vertex order and faces are kept.")
     p.add_argument("input", help="noisy mesh (.ply .obj .off .stl)")
-    p.add_argument("output", help="result mesh (.ply recommended); never the input file")
+    p.add_argument("output", nargs="?",
+                   help="result mesh (.ply recommended); never the input file (omitted with "
+                        "--explain)")
     add_denoise_options(p)
+    p.add_argument("--explain", action="store_true",
+                   help="print the plan (what the input reads as, every decision and the rule "
+                        "that made it, the stages) and write nothing")
     p.add_argument("--log", metavar="RUN.json",
                    help="write the iteration history and parameters as JSON")
     p.add_argument("--report", metavar="OUT.html", help="write a self-contained HTML report")

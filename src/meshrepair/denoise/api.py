@@ -89,6 +89,7 @@ units, so the result is equivariant under rotation, translation and uniform scal
 
 from __future__ import annotations
 
+import inspect
 from collections.abc import Callable
 
 from meshrepair.denoise.finish import (  # noqa: F401  (re-exported)
@@ -107,6 +108,7 @@ from meshrepair.denoise.folds import (  # noqa: F401  (re-exported)
     unfold_result,
     unfolded_data_after_probe,
 )
+from meshrepair.denoise.plan import DenoisePlan
 from meshrepair.denoise.result import DenoiseResult
 from meshrepair.denoise.rules import (  # noqa: F401  (re-exported: the rules read from the input)
     CAD_SUPPORT,
@@ -135,7 +137,14 @@ from meshrepair.denoise.rules import (  # noqa: F401  (re-exported: the rules re
     warm_start_from_probe,
     willmore_weight_from_scale,
 )
-from meshrepair.denoise.run import REORDER_MIN_VERTICES, _denoise, default_stages  # noqa: F401
+from meshrepair.denoise.run import (  # noqa: F401
+    REORDER_MIN_VERTICES,
+    _denoise,
+    _execute,
+    _plan,
+    default_stages,
+)
+from meshrepair.errors import MeshRepairError
 from meshrepair.mesh.reorder import _edge_values_to, locality_order  # noqa: F401  (re-exported)
 from meshrepair.model._memory import heap_allocations
 from meshrepair.model.solver import Stage
@@ -163,6 +172,7 @@ def denoise(
     regions: bool = True,
     polish: bool = True,
     callback: Callable[[dict], None] | None = None,
+    plan: DenoisePlan | None = None,
 ) -> DenoiseResult:
     """Denoise a triangle mesh, keeping sharp features (energy (6) minimised by ADMM).
 
@@ -202,6 +212,9 @@ def denoise(
         ``False`` never polishes.
     callback : called with each iteration's history entry; raise
         :class:`meshrepair.model.solver.StopRequested` to stop early.
+    plan : a plan of this mesh from :func:`plan_denoise`, possibly edited with
+        :func:`dataclasses.replace`; it is run as it is (no reading again), and every other
+        option except ``callback`` must then be left at its default.
 
     Returns
     -------
@@ -216,6 +229,20 @@ def denoise(
     from meshrepair.mesh.array_contract import as_arrays
 
     V, F = as_arrays(V, F)
+    if callback is not None and not callable(callback):
+        raise MeshRepairError(f"callback must be callable or None, got {type(callback).__name__}")
+    if plan is not None:
+        if not isinstance(plan, DenoisePlan):
+            raise MeshRepairError(f"plan must be a DenoisePlan from mr.plan_denoise, got "
+                                  f"{type(plan).__name__}")
+        given = {k: v for k, v in locals().items() if k in _OPTION_DEFAULTS
+                 and not _same(v, _OPTION_DEFAULTS[k])}
+        if given:
+            raise MeshRepairError(f"with plan=, leave the other options at their defaults "
+                                  f"(got {', '.join(sorted(given))}); change the plan instead, "
+                                  "e.g. dataclasses.replace(plan, lam=0.2)")
+        with heap_allocations():
+            return _execute(plan, V, F, callback)
     with heap_allocations():
         return _denoise(V, F, lam=lam, th=th, a=a, robust_iters=robust_iters,
                         feature_iters=feature_iters, mask_update_every=mask_update_every,
@@ -224,3 +251,63 @@ def denoise(
                         n_solver=n_solver, stages=stages, huber_delta=huber_delta,
                         willmore_weight=willmore_weight, regions=regions, polish=polish,
                         callback=callback)
+
+
+def plan_denoise(
+    V,
+    F=None,
+    *,
+    lam: float | None = None,
+    th: float = 30.0,
+    a: float = 10.0,
+    robust_iters: int | None = None,
+    feature_iters: int = 60,
+    mask_update_every: int = 3,
+    min_feature_edges: int = 6,
+    tol: float = 1e-6,
+    unfold: bool = True,
+    inner_solver: str = "armijo",
+    inner_iters: int | None = None,
+    n_solver: str = "auto",
+    stages: tuple[Stage, ...] | None = None,
+    huber_delta: float | None = None,
+    willmore_weight: float | None = None,
+    regions: bool = True,
+    polish: bool = True,
+) -> DenoisePlan:
+    """The plan :func:`denoise` would run on ``(V, F)``, without the main solve.
+
+    It reads the input (noise level, outliers, the robust probe's crease support, the noise's
+    direction and correlation across scales) and decides every parameter of the run; each
+    decision records the values it read and the rule that made it (``print(plan)``). Options
+    as :func:`denoise`; an option the user sets appears in the plan as set by the user, with
+    what it switched off. Deterministic: the same input gives the same plan.
+
+    Returns
+    -------
+    DenoisePlan
+        Frozen; run it with ``denoise(V, F, plan=plan)``, after
+        :func:`dataclasses.replace` of any of ``plan.editable()``.
+    """
+    from meshrepair.mesh.array_contract import as_arrays
+
+    V, F = as_arrays(V, F)
+    with heap_allocations():
+        return _plan(V, F, lam=lam, th=th, a=a, robust_iters=robust_iters,
+                     feature_iters=feature_iters, mask_update_every=mask_update_every,
+                     min_feature_edges=min_feature_edges, tol=tol, unfold=unfold,
+                     inner_solver=inner_solver, inner_iters=inner_iters, n_solver=n_solver,
+                     stages=stages, huber_delta=huber_delta, willmore_weight=willmore_weight,
+                     regions=regions, polish=polish)
+
+
+_OPTION_DEFAULTS = {k: p.default for k, p in inspect.signature(plan_denoise).parameters.items()
+                    if p.kind is p.KEYWORD_ONLY}
+"""The options of :func:`denoise` a plan replaces, with their defaults."""
+
+
+def _same(a, b) -> bool:
+    try:
+        return bool(a == b) if not (a is None or b is None) else a is b
+    except (TypeError, ValueError):
+        return False

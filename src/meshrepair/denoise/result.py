@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
@@ -26,6 +27,8 @@ class DenoiseResult:
     n_unfolded : int, faces folded over in the input that were unfolded before the solve
         (``params["result_folds_unfolded"]``: faces folded in the solve's result, unfolded
         after it)
+    plan : DenoisePlan, the plan that ran (:func:`meshrepair.plan_denoise`), with the
+        decisions taken after the solve in ``plan.after_solve``; ``print(r.plan)`` explains it
     """
 
     V: np.ndarray
@@ -39,6 +42,7 @@ class DenoiseResult:
     noise_estimate: float = float("nan")
     params: dict = field(default_factory=dict)
     n_unfolded: int = 0
+    plan: Any = None
 
     @property
     def mesh(self):
