@@ -9,7 +9,7 @@ the same operations, in the same order, as
 distance wins. Strict IEEE arithmetic (no fast-math), the three-term dot products summed as
 numpy's ``einsum`` sums them on this machine (``(x0 y0 + x2 y2) + x1 y1``, as
 ``_kernels/fidelity.py`` does), so the result equals the numpy twin's bit for bit there (the
-1.18M-vertex run of docs/performance.md, round 11v) and to rounding elsewhere
+1.18M-vertex run of docs/performance.md) and to rounding elsewhere
 (tests/test_kernels_weighted.py). It replaces ~10 candidate rows of temporaries per vertex by
 scalars: at 1.18M vertices one ``closest_points_local`` call took 3.36 s of CPU with the numpy
 loop and 1.33 s with this pass (of which 0.32 s the pass, the rest the k-d tree query).

@@ -5,8 +5,8 @@ V-step on CAD regions; 104 → 65 µs of CPU per call on a 4,610-vertex mesh, wh
 expressions were 5 % of a default denoise: docs/performance.md). Same arithmetic as
 ``_kernels.vertex_normals`` followed by the numpy expression of the twin, in the same order
 (the dot product summed as numpy's ``einsum`` sums it): results equal bit for bit, so the
-iterates of the solver do not change (a rounding-level change moved the MSAE of the chaotic
-fandisk γ0.7 row by +4.6 %)."""
+iterates of the solver do not change (a rounding-level change can move the MSAE of a
+heavy-noise row by several per cent)."""
 
 from __future__ import annotations
 
@@ -110,8 +110,8 @@ if HAVE_NUMBA:
 
 def tangential_anchor_on(V, V0, F, weight, support):
     """:func:`tangential_anchor` with ``support = anchor_support(F, weight)``: the face pass
-    only over the faces of the anchored vertices (round 11v: the anchor acts on the CAD region
-    C; the full pass took 43 ms per call, wall, in main's loaded 1.18M-vertex profile). Equal to
+    only over the faces of the anchored vertices (the anchor acts on the CAD region C; the
+    full pass took 43 ms per call, wall, in the loaded 1.18M-vertex profile). Equal to
     :func:`tangential_anchor`: the same sums in the same order on the anchored vertices, ``V``
     itself elsewhere (``w = 0``)."""
     faces, verts, slot = support

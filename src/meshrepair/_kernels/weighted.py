@@ -13,9 +13,9 @@ energy: four edge passes. Here they are two:
   ``lengths_reg_energy_mixed`` and the per-edge weights' share of ``willmore_extra`` in one
   pass, two accumulators summed as the two kernels sum them.
 
-In main's 1.18M-vertex profile (docs/performance.md, round 11v; wall time on a loaded machine)
-the two passes removed took 0.060 s (``willmore_extra``) and 0.026 s (``grad_edges``) per
-feature iteration. The numpy twins are the compositions they replace
+In the 1.18M-vertex profile (docs/performance.md; wall time on a loaded machine) the two
+passes removed took 0.060 s (``willmore_extra``) and 0.026 s (``grad_edges``) per feature
+iteration. The numpy twins are the compositions they replace
 (``tests/test_kernels_weighted.py``).
 """
 

@@ -1,83 +1,44 @@
-"""Feature-aware denoising: the public one-shot function over the shared ADMM solver.
+"""Feature-aware denoising: :func:`denoise` and :func:`plan_denoise`, thin public functions over
+the plan (:mod:`meshrepair.denoise.analysis`) and its execution (:mod:`meshrepair.denoise.execute`).
 
-Default schedule (docs/parameters.md has the measurements behind every rule; the decisions are
-recorded in ``DenoiseResult.params``):
+A call reads the input once and decides (``print(mr.plan_denoise(V, F))`` shows each decision,
+the values it read and its rule; docs/parameters.md lists every threshold):
 
-0. *Unfold* faces folded over by noise (:func:`meshrepair.model.relax.untangle`). The unfolded mesh
-   is the start of the solves; the fidelity data stays the input, except for impulsive noise
-   (:func:`fidelity_data`), and for the main run only where the probe reads that noise along
-   the normals (:func:`unfolded_data_after_probe`, round 9r). Faces still folded in the
-   result are unfolded the same way at the end (:func:`unfold_result`).
+0. *Unfold* faces folded over by noise (:func:`meshrepair.model.relax.untangle`). The unfolded
+   mesh starts the solves; the fidelity data stay the input, except for impulsive noise along
+   the normals (:func:`fidelity_data`, :func:`unfolded_data_after_probe`). Faces still folded
+   in the result are unfolded the same way at the end (:func:`unfold_result`).
 1. *Probe*: the robust stage below on the whole mesh (MC with ``a = 0.5`` on every edge, a
-   total-variation-like smoother of the normals). Its result N¹ decides:
-
-   * the *crease-supported region* C (:func:`meshrepair.denoise.regions.crease_support`): long
-     chains
-     (≥ 30 edges) of edges whose N¹-dihedral exceeds ``th``, dilated by 2 rings;
-   * the *flat edges* of C (:func:`meshrepair.denoise.regions.flat_edges`, probe normal spread <
-     7°);
-   * the *noise scale* (:func:`meshrepair.denoise.scale.noise_scale`): correlation ratio ρ, length,
-     level;
-   * the *direction* of the noise (:func:`meshrepair.denoise.scale.tangential_ratio` r_t).
-
-2. *Robust stage* from the input again: MC (``a = 0.5``, 0.25 for heavy noise γ̂ > 0.33) on C,
+   total-variation-like smoother of the normals). Its normals N¹ decide the crease-supported
+   region C (:func:`meshrepair.denoise.regions.crease_support`: chains of ≥ 30 edges whose
+   N¹-dihedral exceeds ``th``, dilated by 2 rings; chains whose network branches and has rough
+   sides are noise, :mod:`meshrepair.denoise.crease_network`), the flat edges of C, the noise's
+   correlation across scales (:func:`meshrepair.denoise.scale.noise_scale`: ratio ρ, length ℓ,
+   level) and its direction (:func:`meshrepair.denoise.scale.tangential_ratio` r_t).
+2. *Robust stage* from the input again: MC (``a = 0.5``, 0.25 above γ̂ = 0.33) on C,
    edge-Willmore elsewhere; ``β1 = 2a``, ``β2 = 10 β1``; ``clip(130 γ̂, 10, 40)`` iterations
-   (40 with fold-overs; ``40 + 600 (γ̂ - 0.33)`` up to 120 for heavy noise), left early when the
-   relative change of V drops below ``2e-4``.
+   (40 with fold-overs, more for heavy noise), left early when the relative change of V drops
+   below ``2e-4``.
 3. *Feature stage*: in C, M_E from the dihedral threshold (refreshed every 3 iterations, chains
-   ≥ 6 edges) with ``a = 10``, and the flat-TV class (:mod:`meshrepair.model.priors`, MC ``a =
-   0.5``)
-   on C's flat edges; edge-Willmore elsewhere, with weight ``6 w`` outside C on CAD parts
-   (:func:`outside_weight`); ``β1 = 1.2 a``, ``β2 ≈ 1.67 β1``; ≤ 60 iterations or rule (35).
-4. *Polish* (heavy noise on CAD parts, correlated noise; :func:`polish_rule`): a bilateral
-   normal filter bounded by the converged M_E on the flat patches, at the noise's scale, then
-   the vertices to the filtered normals, keeping the solve's data term
-   (:mod:`meshrepair.denoise.polish`, :mod:`meshrepair.denoise.polish_fidelity`).
-4b. *Crease sharpening* (correlated noise, :func:`sharpen_rule`): mode-seeking face normals at
-   the noise's scale, kept per connected region where they bring the result closer to the
-   input (:mod:`meshrepair.denoise.modes`); it runs after the re-anchoring of step 5.
-5. *Tangential re-anchoring* of the smooth region (:mod:`meshrepair.denoise.reproject`): outside C
-the
-   result's vertices slide along the result surface towards the closest points of the input's
-   vertices, ``V_i + w_i (π_S(V⁰_i) - V_i)`` with the least-variance weights
-   ``w_i = σ²/(σ² + κ² d_i²)``, when the residual tangential ratio reads noise along the
-   normals (``ρ_t < 0.6``) and the noise is not heavy (:data:`REANCHOR`).
-6. *Organic finish* (round 9, :mod:`meshrepair.denoise.organic`) on meshes that are not CAD parts,
-with
-   white noise that is not heavy (:func:`guidance_rule`): a one-ring bilateral normal filter
-   bounded by M_E with Sun et al. vertex steps; then, for impulsive noise or a tangential drift
-   the re-anchoring left (:func:`reintegrate_rule`), the vertices re-integrated from the input
-   by a few Sun et al. steps towards those normals.
-   Round 10s: a re-integration that folds faces its target does not have, where the input's
-   tangential offset is large, is not kept (:func:`meshrepair.denoise.folds.reintegration_keeps`).
-7. *CAD finish* (round 9c, :mod:`meshrepair.denoise.cadfinish`) on CAD parts with white noise: the
-same
-   one-ring filter, one-sided at M_E, on the faces away from M_E and the flat sides of its
-   creases (:func:`meshrepair.denoise.cadfinish.cad_finish_rule`).
+   ≥ 6 edges) with ``a = 10``, and the flat-TV class (:mod:`meshrepair.model.priors`) on C's
+   flat edges; edge-Willmore elsewhere, with weight ``6 w`` outside C on CAD parts
+   (:func:`outside_weight`, lowered when the discrepancy principle of
+   :mod:`meshrepair.denoise.discrepancy` finds it smooths away signal); ``β1 = 1.2 a``,
+   ``β2 ≈ 1.67 β1``; ≤ 60 iterations or rule (35).
+4. *After the solve* (:func:`meshrepair.denoise.finish.finish_result`): the polish of heavy or
+   correlated noise (:mod:`meshrepair.denoise.polish`), the Taubin low-pass of the smooth
+   region of organic meshes (:mod:`meshrepair.denoise.lowpass`), the tangential re-anchoring
+   of the smooth region (:mod:`meshrepair.denoise.reproject`), the organic and CAD finishes
+   (:mod:`meshrepair.denoise.organic`, :mod:`meshrepair.denoise.cadfinish`), the crease
+   sharpening of correlated noise (:mod:`meshrepair.denoise.modes`), and the correlated-noise
+   low-pass (:mod:`meshrepair.denoise.corrlowpass`).
 
-Round 9s: on a CAD part the outside weight 6 is lowered to 3 when the normal residual outside C
-exceeds the one in C by more than 3 % (a discrepancy principle,
-:mod:`meshrepair.denoise.discrepancy`;
-the main run is solved again); on an organic mesh with white noise the smooth
-region gets ``round((γ̂/0.13)²)`` Taubin λ|μ pairs before the re-anchoring
-(:mod:`meshrepair.denoise.lowpass`).
-
-Round 10h: heavy white noise on an organic mesh (total level ``γ̂ √(1 + 2 min(r_t, 1)²) > 0.32``
-after the probe) is low-passed first: ``round((γ̂ √(1 + min(r_t, 1)²) / 0.044)²)`` (≤ 96)
-Taubin λ|μ pairs on the input, then the whole schedule above runs on the low-passed mesh
-(:mod:`meshrepair.denoise.presmooth`; ``params['presmooth_steps']``). The run on the low-passed mesh
-is not polished. Round 11w: at most ``K_q`` pairs, the most that do not halve a wave of length
-0.44 q (q the probe's radius in edge lengths; :mod:`meshrepair.denoise.coarse_lowpass`).
-
-Round 11d: a crease chain of the probe is dropped from C when both the whole network of chains
-and the chain itself branch (β > 0.2) and have rough sides (s > 5.5°): noise, not a CAD crease
-(:mod:`meshrepair.denoise.crease_network`); when that removed part of C, the noise is read as heavy
-for
-this mesh and the round-10h gate does not ask for γ_t > 0.32.
-
-Round 11x: the full Taubin steps of rounds 10h and 11c keep the input's vertex layout: the
-low-passed surface is resampled at it (:mod:`meshrepair.denoise.layoutkeep`); the coarse-to-fine run
-reads its noise level and tangential ratio on the low-passed mesh before the resampling.
+*Coarse to fine*: heavy white noise on an organic mesh is low-passed first by Taubin λ|μ
+pairs on the input (:mod:`meshrepair.denoise.presmooth`; the length capped at the mesh's
+resolution, :mod:`meshrepair.denoise.coarse_lowpass`, read from the relief,
+:mod:`meshrepair.denoise.heavylength`, and checked by its Stein risk,
+:mod:`meshrepair.denoise.lengthcheck`; the input's vertex layout kept,
+:mod:`meshrepair.denoise.layoutkeep`), then the whole schedule runs on the low-passed mesh.
 
 Throughout: λ = ``clip(0.02 / γ̂², 0.05, 1)``; the Willmore weight ``w`` from ρ for correlated
 noise along the normals (:func:`willmore_weight_from_scale`) and then ``3 max(1, ℓ²)`` V-steps
@@ -198,8 +159,8 @@ def denoise(
     n_solver : N-subproblem solver (``"auto"``, ``"cg"``, ``"direct"``).
     stages : a custom schedule replacing the default two stages (then no region probe).
     huber_delta : threshold δ of the robust Huber fidelity (:mod:`meshrepair.model.fidelity`), mean
-        edge lengths; default from the noise (``2 γ̂_rms`` when the noise looks impulsive,
-        ``γ̂_rms > 1.3 γ̂``, else 0 = quadratic); 0 turns it off.
+        edge lengths, > 0; default from the noise (``2 γ̂_rms`` when the noise looks impulsive,
+        ``γ̂_rms > 1.3 γ̂``, else 0 = quadratic).
     willmore_weight : weight of edge-Willmore on smooth edges; default from the correlation of
         the noise (:func:`willmore_weight_from_scale`).
     regions : decide per region whether a crease is supported (:mod:`meshrepair.denoise.regions`)

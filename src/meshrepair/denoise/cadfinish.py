@@ -1,13 +1,10 @@
-"""CAD finish: the one-ring guidance filter on the flat sides of a CAD part's creases (issue 12,
-round 9c).
+"""CAD finish: the one-ring guidance filter on the flat sides of a CAD part's creases.
 
 After the feature stage (and the heavy-noise polish of :mod:`meshrepair.denoise.polish`) the faces
-of a
-CAD part keep a one-ring ripple of their normals, on the planar patches and on the flat sides of
-the converged creases ``M_E``. The organic finish (:mod:`meshrepair.denoise.organic`, round 9)
-removes
-that ripple on meshes without crease support; this module applies the same filter on CAD parts,
-where it must keep the creases.
+of a CAD part keep a one-ring ripple of their normals, on the planar patches and on the flat
+sides of the converged creases ``M_E``. The organic finish (:mod:`meshrepair.denoise.organic`)
+removes that ripple on meshes without crease support; this module applies the same filter on
+CAD parts, where it must keep the creases.
 
 **Neighbourhood (one-sided).** ``K(f)`` is ``f`` and the faces sharing an edge with ``f`` that is
 not in ``M_E`` (:func:`meshrepair.denoise.polish._neighbourhood_csr` with ``r = 1``). A face
@@ -31,8 +28,8 @@ crease (on a CAD part's flat sides ``s_f`` reads 0.2-0.8°, median) get the rang
 ``σ_s = 0.2``; a face touching the crease whose own side is curved or rippled within one ring
 (``s_f ≥ τ``: the curved sides of a spike or a blend, several degrees) gets the narrow
 ``σ_s' = 0.1``, so it averages only with neighbours whose normals are within a few degrees of
-its own and the crease is not rounded (measured, docs/parameters.md: σ_s 0.2 on every face
-costs trim_star +5 %, leaving those faces out entirely gives up 40 % of the gain on fandisk γ0.3).
+its own and the crease is not rounded (docs/parameters.md: the wide σ_s on every face rounds
+sharp spikes, and leaving those faces out entirely gives up a large part of the gain).
 
 **Filter and vertex update** (the guidance of :mod:`meshrepair.denoise.organic`): per pass,
 
@@ -87,8 +84,8 @@ def cad_finish_rule(gamma: float, outside: float, willmore: float) -> int:
     :func:`meshrepair.denoise.rules.willmore_weight_from_scale` is 1: correlated scanner noise
     has its own polish at the noise's scale); heavy noise included (the finish runs after the
     polish). The number of passes is the organic guidance's own rule (one per 0.09 mean edge
-    lengths of γ̂, the MAD estimate): the one-ring ripple left grows with the noise.
-    Measured in docs/parameters.md (round 9c).
+    lengths of γ̂, the MAD estimate): the one-ring ripple left grows with the noise
+    (docs/parameters.md).
     """
     if not CAD_FINISH or not outside > 1.0 or willmore != 1.0 or not np.isfinite(gamma):
         return 0

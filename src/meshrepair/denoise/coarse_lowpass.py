@@ -1,14 +1,13 @@
-r"""The low-pass of the input of round 10h at the mesh's resolution (issue 12, round 11w).
+r"""The coarse-to-fine low-pass of the input, capped at the mesh's resolution.
 
-Round 10h (:mod:`meshrepair.denoise.presmooth`) low-passes the input of an organic mesh under heavy
+:mod:`meshrepair.denoise.presmooth` low-passes the input of an organic mesh under heavy
 white noise with ``k = clip(round((γ_k / γ_p)²), 0, 96)`` Taubin λ|μ pairs before the solve.
 ``k`` is read from the noise level alone, in mean edge lengths: the length that removes noise of
 that level, whatever the mesh. What the filter takes from the *surface* depends on the
 resolution: the filter acts on a fixed number of rings, and a ring of a coarse mesh is a large
-part of the shape. On spot decimated to 1/4 of its faces (``benchmarks/resolution.py``,
-``dec``) the ears, horns and legs are a few rings wide and the length read at ×1 rounds them
-away (docs/parameters.md, round 11w: spot ``dec`` γ0.3 normal, whole model after the low-pass,
-k = 4 / 5 / 10 / 25 / 48 pairs: MSAE 146 / 155 / 185 / 215 / 250; the rule asks 48).
+part of the shape. On a mesh decimated to 1/4 of its faces (``benchmarks/resolution.py``,
+``dec``) thin parts are a few rings wide, and the length read from the noise level alone rounds
+them away: the error of the low-passed model then grows with every pair past a few.
 
 **The filter's transfer.** With ``W`` the uniform umbrella operator, one λ|μ pair multiplies
 an eigenvector of ``I − W`` of eigenvalue ``x`` by
@@ -32,35 +31,31 @@ result, whose edges the noise does not lengthen: on the resolution truths it rea
           \qquad c_q = 0.44,
 
 i.e. ``t(x(Λ_q))^k ≥ 1/2``. ``c_q`` is the smallest value (two digits) for which no mesh as
-finely sampled as the coarsest ×1 design truth (spot, ``q`` 14.7-14.9 on its probe) is ever
-capped: ``K_q(14.7) = 107 ≥ 96``, round 10h's own cap (``c_q = 0.43``: 94). ``K_q`` falls
-steeply with ``q``: 42 at q 12.3, 11 at q 9, 4-5 at q 7.1-7.4 (spot ``dec``).
+finely sampled as the coarsest full-resolution benchmark mesh (``q ≈ 14.7``) is ever capped:
+``K_q(14.7) = 107 ≥ 96``, the low-pass's own cap (``c_q = 0.43``: 94). ``K_q`` falls steeply
+with ``q``: 42 at q 12.3, 11 at q 9, 4-5 at q 7.1-7.4.
 
-**After a capped low-pass the noise is read as white.** Round 10h's gate asks for white noise
+**After a capped low-pass the noise is read as white.** The low-pass's gate asks for white noise
 (Willmore weight 1 on the input). A low-pass shortened by the cap leaves the noise's long
 wavelengths, correlated by the filter, and the run on the low-passed mesh reads them so (probe
 profile ρ 1.7-1.8) and takes the correlated-noise branch (Willmore weight up to 16,
 :func:`meshrepair.denoise.rules.willmore_weight_from_scale`): a prior of ``w`` averages the
-normals over about ``√w`` rings, the length the cap has just refused on this mesh. Measured
-with the crease support forced empty (docs/parameters.md, round 11w): spot ``dec`` γ0.5 normal
-at its ``K_q = 4`` MSAE 378.0 (w 16), 258.5 with w = 1; spot ``dec`` γ0.3 normal at k = 3 304.9
-against 148.0; rocker_arm ``dec`` γ0.3 normal at k = 4 270.1 against 136.3. So the run after a
-low-pass *shortened by the cap* (``K_q`` below round 10h's ``k``) keeps the input's white read,
+normals over about ``√w`` rings, the length the cap has just refused on this mesh. So the run
+after a low-pass *shortened by the cap* (``K_q`` below the low-pass's ``k``) keeps the input's
+white read,
 
 .. math:: w = 1 \quad\text{when } K_q < k
 
 (:func:`keep_white`). Where the cap does not act the run reads the noise of the low-passed mesh
-as before: there the correlated branch helps (keeping w = 1 on every low-passed run measured
-camelhead ``sub1`` γ0.3 / γ0.5 normal 40.2 / 66.5 → 93.7 / 137.0, spot ``sub2`` γ0.5 normal
-22.0 → 47.1; not taken).
+as it is: on finely sampled meshes the filter's long-wavelength residue is correlated noise,
+and the correlated branch removes it.
 
 **Where the cap reads.** A surface without relief at the mesh's scale loses nothing to a long
-low-pass, however coarse the mesh: a 642-vertex sphere (q ≈ 5) at γ0.5 normal reads MSAE 20.6
-with ``K_q`` = 3 pairs, 7.3 without any low-pass and less with round 10h's 64. Round 11c's read
-of the curvature variation (:func:`meshrepair.denoise.coarse.curvature_roughness`, ``c = ‖h − W²h‖ /
-‖h‖`` after 8 Taubin pairs, here on the probe) says which: the cap acts only where
-``c ≥ c_0 = 0.185``, round 11c's bound of a surface smooth at its resolution (probe reads:
-icospheres 0.10-0.15 at γ0.5-0.6, spot ``dec`` 0.28-0.30, spot ×1 0.20-0.24, nicolo ×1 0.35).
+low-pass, however coarse the mesh (a 642-vertex sphere, q ≈ 5, wants the full length). The
+read of the curvature variation (:func:`meshrepair.denoise.coarse.curvature_roughness`,
+``c = ‖h − W²h‖ / ‖h‖`` after 8 Taubin pairs, here on the probe) says which: the cap acts only
+where ``c ≥ c_0 = 0.185``, the bound of a surface smooth at its resolution (icospheres read
+0.10-0.15 on the probe at γ0.5-0.6, decimated organic meshes 0.28-0.30).
 
 The cap reads lengths only in units of the mesh's own edge length: it is invariant under rigid
 motions and uniform scaling.
@@ -109,7 +104,7 @@ def max_presmooth_steps(q: float, max_steps: int) -> int:
 
 
 def capped_steps(k: int, V_probe: np.ndarray, F: np.ndarray, edges: np.ndarray) -> int:
-    """Round 10h's ``k`` capped at ``K_q``, ``q`` read on the probe's vertices ``V_probe``,
+    """The low-pass length ``k`` capped at ``K_q``, ``q`` read on the probe's vertices ``V_probe``,
     when the probe's surface has relief at the mesh's resolution (module docstring:
     :func:`meshrepair.denoise.coarse.curvature_roughness` of the probe ``≥ C_0``; read only when
     ``K_q < k``)."""

@@ -1,4 +1,4 @@
-"""Correlated noise on smooth organic meshes: a low-pass at the noise's scale (issue 12, round 11q).
+"""Correlated noise on smooth organic meshes: a low-pass at the noise's scale.
 
 Spatially correlated noise (scanner noise: bumps ``ℓ`` rings wide) on an organic mesh is read by
 the multi-scale profile of :mod:`meshrepair.denoise.scale` (``ρ = s_2/s_1`` well above 1,
@@ -7,9 +7,9 @@ length ``ℓ = √m``), but such noise usually reads a tangential ratio ``r_t �
 high-passed normal part is small), so the Willmore weight stays 1 and the schedule treats it as
 white: the one-ring low-pass of :mod:`meshrepair.denoise.lowpass` (``k = 1-2`` pairs) and the
 one-ring
-guidance of :mod:`meshrepair.denoise.organic` act at the wrong scale and leave the bumps (synthetic
-``correlated_noise`` m = 4, γ = 0.5 on nicolo / pierrot / igea: 49-60 % of the noisy MSAE is
-left; docs/parameters.md, round 11q).
+guidance of :mod:`meshrepair.denoise.organic` act at the wrong scale and leave the bumps (about
+half of the noisy input's MSAE is left under synthetic ``correlated_noise`` with m = 4,
+γ = 0.5).
 
 **The step.** Taubin's λ|μ filter (1995, :func:`meshrepair.denoise.lowpass.taubin_region`, full
 step,
@@ -28,17 +28,16 @@ as :mod:`meshrepair.denoise.lowpass` does with ``γ̂`` for white noise):
 
 **The gate** (:func:`corr_steps`): an organic mesh (crease support below
 :data:`meshrepair.denoise.rules.CAD_SUPPORT`, outside weight 1), not impulsive, the probe's
-profile correlated, ``ρ ≥ ρ_0 = 1.4`` (white Gaussian inputs read 0.83-1.12, the white
-false positives of low noise on irregular meshes up to 1.35, the real Kinect scan 1.22), and
-the one-ring level above ``γ_0 = 0.095``: below it the solve has already taken the roughness and
-what is left is mostly the surface's own relief, which a long low-pass removes (m = 4 γ = 0.3
-and m = 8 γ = 0.6 rows read γ̂ 0.068-0.084 and lose 0.6-5.4 % from the first 10 pairs; the m = 4
-γ = 0.5 rows read 0.102-0.110 and gain 4-18 %). Values read off the design rows of
-docs/parameters.md, round 11q (bunny, nicolo and the published truths igea, pierrot).
+profile correlated, ``ρ ≥ ρ_0 = 1.4`` (white Gaussian inputs read 0.83-1.12, low white noise
+on irregular meshes up to 1.35, real scanner noise about 1.22), and the one-ring level above
+``γ_0 = 0.095``: below it the solve has already taken the roughness and what is left is mostly
+the surface's own relief, which a long low-pass removes (rows reading γ̂ 0.068-0.084 lose from
+the first pairs, rows reading 0.102-0.110 gain). Values chosen on the benchmark grid
+(docs/parameters.md).
 The readings are those of the first run (the input), also when the coarse-to-fine run of
 :mod:`meshrepair.denoise.presmooth` follows; the step then acts on that run's result.
 
-**Branch 2 (round 11y): correlated noise that reads white.** Noise correlated over ``√2``
+**Branch 2: correlated noise that reads white.** Noise correlated over ``√2``
 rings reads ``ρ ≤ 1.12`` (as white noise does) but a band ratio ``β = b_1/b_0 ≈ 1.4``
 (:mod:`meshrepair.denoise.corrwhite`: the finest two octaves ``I − W``, ``W − W²`` of the input
 minus the
@@ -49,13 +48,13 @@ non-impulsive meshes, the step also runs when
 
 with ``k = clip(round((ℓ_β γ̂ / γ_q)²), 0, K_max)``, ``ℓ_β = √m̂`` the band read's own length
 (the ``m`` whose white-model ratio ``β(m)`` is nearest). ``β₀ = 1.2`` is the model's ``β(1)``
-(white noise along the normals reads 0.96-1.07 at ``γ̂ > 0.13`` on the design meshes, m = 2
+(white noise along the normals reads 0.96-1.07 at ``γ̂ > 0.13`` on the benchmark meshes, m = 2
 fields 1.24-1.39); ``τ < τ₀`` keeps noise in random directions out (it raises ``β`` too, through
 its tangential part: 1.26-1.50, but reads τ ≥ 0.58, the m = 2 fields ≤ 0.27); ``γ₁`` keeps low
 white noise out, where the relief's cross terms dominate ``b_1`` (γ = 0.1 rows read γ̂ 0.08-0.12
-and β up to 1.40; m = 2 fields at γ ≥ 0.3 read γ̂ ≥ 0.15). Read off the design rows of
-docs/parameters.md, round 11y (spot, rocker_arm, fandisk fields). The band read costs a few
-sparse products and is computed only where the other conditions of branch 2 hold.
+and β up to 1.40; m = 2 fields at γ ≥ 0.3 read γ̂ ≥ 0.15). Chosen on the benchmark grid
+(docs/parameters.md). The band read costs a few sparse products and is computed only where the
+other conditions of branch 2 hold.
 """
 
 from __future__ import annotations
@@ -67,7 +66,7 @@ RHO_0 = 1.4
 GAMMA_0 = 0.095
 GAMMA_Q = 0.02
 MAX_STEPS = 160
-CORR_WHITE = True  # round 11y: branch 2
+CORR_WHITE = True  # branch 2: correlated noise that reads white
 GAMMA_1 = 0.13
 BETA_0 = 1.2
 TAU_0 = 0.45

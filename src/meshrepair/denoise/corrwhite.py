@@ -1,9 +1,10 @@
-"""Correlated noise that reads white: a band read of the noise's correlation (issue 12, round 11y).
+"""Correlated noise that reads white: a band read of the noise's correlation.
 
 The profile of :mod:`meshrepair.denoise.scale` compares *cumulative* high-passes ``I − W^k``
 (``ρ = s_2/s_1``). Noise made by ``m = 2`` diffusion steps of white noise (correlation length
 √2 rings) reads ``ρ ≈ 1.03-1.09`` there on a flat grid, as white noise does (0.96-1.0), and
-1.07-1.12 on organic meshes: round 11q's gate (``ρ ≥ 1.4``) cannot see it. A *band* ratio has
+1.07-1.12 on organic meshes: the profile gate of :mod:`meshrepair.denoise.corrlowpass`
+(``ρ ≥ 1.4``) cannot see it. A *band* ratio has
 more contrast. With ``W = D⁻¹A`` (umbrella averaging) take the two finest octaves
 
 .. math:: B_0 = I - W, \\qquad B_1 = W - W^2 ,
@@ -25,7 +26,7 @@ surface's relief is removed as in :mod:`meshrepair.denoise.scale`: the levels of
 probe's result: the shape without the fine noise) are subtracted in quadrature,
 ``b_a ← (b_a(V)² − b_a(R)²)^{1/2}``, with the input's vertex normals for ``V`` and the
 reference's for ``R``. Only the two finest octaves are used: from ``W² − W⁴`` on the relief of
-the shared organic meshes is larger than the noise (rocker_arm: 0.58 against 0.51 at γ 0.4) and
+the shared organic meshes is as large as the noise or larger (0.58 against 0.51 at γ 0.4) and
 the difference in quadrature is dominated by cross terms.
 
 **Direction.** Noise in random directions (isotropic, white) also raises ``β`` (1.26-1.50 on
@@ -39,8 +40,8 @@ its normal level,
 
 reads ≈ 1 for isotropic noise (two tangential components each as large as the normal one) and
 ≈ 0 for noise along the normals (a scanner's depth noise); the mesh's own irregular sampling is
-in both ``t(V)`` and ``t(R)`` and cancels. Measured on the design rows (docs/parameters.md,
-round 11y): m = 2 fields τ ≤ 0.27, random-direction white noise at ``γ̂ > 0.13`` τ ≥ 0.58.
+in both ``t(V)`` and ``t(R)`` and cancels. On the benchmark grid (docs/parameters.md) m = 2
+fields read τ ≤ 0.27, random-direction white noise at ``γ̂ > 0.13`` τ ≥ 0.58.
 
 The gate that uses this read is :func:`meshrepair.denoise.corrlowpass.corr_steps` (its branch 2).
 """

@@ -1,13 +1,12 @@
-r"""Is a crease chain of the probe a CAD part's crease, or noise? (issue 12, round 11d).
+r"""Is a crease chain of the probe a CAD part's crease, or noise?
 
 :func:`meshrepair.denoise.regions.crease_support` keeps every chain of at least ``L_long = 60``
-creased
-edges of the robust probe's normals ``N¹`` as it is. On a CAD part those chains are its
-creases. On a smooth organic mesh under heavy normal noise (spot γ0.4, ≈ 3k vertices) the probe
-leaves dihedrals above ``th`` all over the surface, and they join into long chains too: the
-supported region then covers 36-50 % of the edges, the mesh is read as a CAD part (the outside
-weight, the discrepancy test, the CAD finish) and the result loses to a plain Taubin filter.
-Length does not tell these apart; the *shape* of a chain does.
+creased edges of the robust probe's normals ``N¹`` as it is. On a CAD part those chains are its
+creases. On a coarse smooth organic mesh under heavy normal noise the probe leaves dihedrals
+above ``th`` all over the surface, and they join into long chains too: the supported region
+then covers a third to a half of the edges, the mesh is read as a CAD part (the outside weight,
+the discrepancy test, the CAD finish) and the result loses to a plain Taubin filter. Length
+does not tell these apart; the *shape* of a chain does.
 
 For a chain ``c`` (a connected component of the creased edges kept by
 :func:`meshrepair.denoise.regions.crease_support`, before its dilation), ``V_c`` its vertices and
@@ -19,11 +18,11 @@ For a chain ``c`` (a connected component of the creased edges kept by
 
   A CAD part's creases are polylines that meet at its corners: ``d(v) = 2`` along a crease,
   ``d(v) ≥ 3`` at a corner and where noise makes the crease zigzag across a triangle, so β is
-  small (0.00-0.22 per chain on fandisk, twelve, trim_star and screwdriver at γ 0.1-0.7; up to
-  0.41 on single chains of sharp_sphere; 0.02-0.18 over each whole network). The edges of a
-  smooth surface whose probe dihedral exceeds ``th`` at heavy noise are where the noise
-  happened to be large: they form a random network with junctions everywhere (spot γ0.4
-  normal: 0.19-0.46 per chain, 0.30-0.36 over the network).
+  small (on the benchmark CAD parts at γ 0.1-0.7: mostly 0.00-0.22 per chain, up to 0.41 on
+  single chains of a curved part; 0.02-0.18 over each whole network). The edges of a smooth
+  surface whose probe dihedral exceeds ``th`` at heavy noise are where the noise happened to be
+  large: they form a random network with junctions everywhere (0.19-0.46 per chain, 0.30-0.36
+  over the network).
 
 * the **side spread** (the ``s`` of :func:`meshrepair.denoise.regions.chain_statistics`): for a
   chain
@@ -35,9 +34,9 @@ For a chain ``c`` (a connected component of the creased edges kept by
             \operatorname{mean}_{f \in S_b} \angle(N¹_f, m_b)\big).
 
   The probe is a total-variation-like smoother: on a CAD part both sides of a crease come out
-  nearly flat (2.0-7.6° per chain, 2.0-5.2° over the network but for screwdriver's curved
-  sides, up to 7.6°); beside a noise chain the surface is as rough as anywhere else on the
-  mesh (spot γ0.4: 6.0-9.8° per chain, 7.5-8.1° over the network). A face all of whose edges
+  nearly flat (2.0-7.6° per chain, 2.0-5.2° over the network but for parts with curved sides,
+  up to 7.6°); beside a noise chain the surface is as rough as anywhere else on the mesh
+  (6.0-9.8° per chain, 7.5-8.1° over the network). A face all of whose edges
   are creased has no side at all (``S_a = {a}``) and gives no evidence: an edge is averaged
   over the sides it has, an edge with none is left out of the medians, and a chain (or
   network) with no side at all reads ``s`` = NaN, never noise (a regular tetrahedron: every
@@ -52,29 +51,25 @@ dropped from the crease support when both levels read noise:
           \qquad β_0 = 0.2,\; s_0 = 5.5°.
 
 The network test keeps every chain of a CAD part whose statistics are ordinary (the per-chain
-reads alone are noisy on curved CAD sides: one 87-edge crease of sharp_sphere γ0.3 seed 2 reads
-β_c 0.22, s_c 5.9°, and dropping it cost 7 %); the chain test keeps the real creases of a CAD
-part whose probe also left noise chains (sharp_sphere γ0.4 seed 8: the network reads β 0.24,
-s 6.4°, six of its ten chains are noise and four, 0.24 of the edges, are kept).
+reads alone are noisy on curved CAD sides, where a real crease can read β_c 0.22, s_c 5.9°);
+the chain test keeps the real creases of a CAD part whose probe also left noise chains (a
+network that reads β 0.24, s 6.4° can hold both).
 
 ``s_0`` is the side-spread bound of the short-chain test of :mod:`meshrepair.denoise.regions`
 (:data:`meshrepair.denoise.regions.SIDE_SPREAD`); ``β_0`` lies between the CAD networks (≤ 0.18) and
-spot γ0.4's (≥ 0.30). Requiring both keeps a CAD part whose sides are curved (screwdriver:
-network s up to 7.6°, β ≤ 0.18) or whose network branches (sharp_sphere γ0.7: β up to 0.16,
-s 4.2°).
+the noise networks (≥ 0.30). Requiring both keeps a CAD part whose sides are curved (network s
+up to 7.6°, β ≤ 0.18) or whose network branches (β up to 0.16, s 4.2°).
 
 **The noise is heavy for this mesh** (:func:`heavy_from_network`) when the dropped noise
 chains had supported more than ``f_h = 4 %`` of the edges: noise that is large against the
 local triangle size makes chains over a sizeable part of the surface, whatever the one-ring level
-γ̂ in mean edge lengths reads (spot γ 0.2-0.4: 5.4-37 %; camelhead, whose triangles vary widely
-in size and which reads γ̂ 0.25 at γ 0.3: 18-99 %). The sparse terrace chains an unconverged
+γ̂ in mean edge lengths reads (5-37 % on coarse organic meshes at γ 0.2-0.4, up to nearly all
+edges on a mesh whose triangle sizes vary widely). The sparse terrace chains an unconverged
 probe leaves on a finely subdivided mesh are dropped too but do not make the noise heavy
-(twelve subdivided 3 / 4 times, γ 0.3: 1.7 % / 0.5 %; with ``f_h = 0`` the 1.18M-vertex one
-was low-passed first, at 2.1× the CPU time). Then the gate of the
-low-pass of the input (:func:`meshrepair.denoise.presmooth.presmooth_steps`, ``heavy=True``) does
-not
-ask for ``γ_t > 0.32``; its other conditions (an organic mesh, white noise, not impulsive) and
-its length ``k`` are unchanged. Measured in docs/parameters.md (round 11d).
+(0.5-1.7 % of the edges). Then the gate of the low-pass of the input
+(:func:`meshrepair.denoise.presmooth.presmooth_steps`, ``heavy=True``) does not ask for
+``γ_t > 0.32``; its other conditions (an organic mesh, white noise, not impulsive) and its
+length ``k`` are unchanged (docs/parameters.md).
 
 Both statistics read angles and the mesh's connectivity only: they are invariant under rigid
 motions and uniform scaling.

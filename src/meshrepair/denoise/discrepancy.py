@@ -1,11 +1,10 @@
 """A discrepancy principle for the smooth prior's weight outside the crease-supported region.
 
-Round 4 (docs/parameters.md) gives edge-Willmore the weight ``w_out = 6`` outside the
-crease-supported region C of a CAD part. A quadratic prior that strong is right where the
-surface outside C is planar or of constant curvature at the scale of the noise (twelve,
-sharp_sphere, fandisk at γ ≥ 0.2), and wrong where the curvature *changes* within a few rings
-(fandisk's tangent blends between cylinders and planes at γ = 0.1): there it takes signal away
-with the noise.
+:func:`meshrepair.denoise.rules.outside_weight` gives edge-Willmore the weight ``w_out = 6``
+outside the crease-supported region C of a CAD part. A quadratic prior that strong is right
+where the surface outside C is planar or of constant curvature at the scale of the noise, and
+wrong where the curvature *changes* within a few rings (tangent blends between cylinders and
+planes at low noise): there it takes signal away with the noise.
 
 Morozov's discrepancy principle says when a regulariser is too strong: the residual of the
 data, ``V⁰ - V``, then exceeds the noise. The level of the noise is not known exactly (the
@@ -21,9 +20,9 @@ With ``n_i`` the result's vertex normals and the mean normal residuals
 the weight is kept when ``q = r_out / r_in ≤ 1 + ε`` and otherwise lowered (``6 → 3 → 1``,
 the first weight whose solve satisfies the test; 1 is the paper's prior, always accepted).
 Only the normal part is used: the tangential anchor acts on C only, so the tangential
-residuals of the two regions are not comparable. ε = 0.03 is read off the design rows
-(docs/parameters.md, round 9s): q with ``w_out = 6`` is 0.81-1.006 on the rows where 6 beats 1
-and 1.047 on fandisk γ0.1 normal, where it loses.
+residuals of the two regions are not comparable. ε = 0.03 lies in the gap measured on the
+benchmark grid (docs/parameters.md): q with ``w_out = 6`` reads 0.81-1.006 on the rows where 6
+beats 1 and 1.047 on the row where it loses.
 """
 
 from __future__ import annotations

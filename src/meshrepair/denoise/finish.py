@@ -1,28 +1,27 @@
-"""The steps after the solve of :func:`meshrepair.denoise` (issue 12, rounds 5-10).
+"""The steps after the solve of :func:`meshrepair.denoise`.
 
-Each step reads the decisions the probe recorded in ``info`` (docs/parameters.md, one section per
-round) and records its own, in this order:
+Each step reads the decisions the plan recorded in ``info`` (docs/parameters.md) and records its
+own (they appear in ``DenoiseResult.plan.after_solve``), in this order:
 
 1. *polish* (heavy noise on CAD parts, correlated noise;
-   :func:`~meshrepair.denoise.rules.polish_rule`, :mod:`meshrepair.denoise.polish` with the solve's
-   data
-   term, :mod:`meshrepair.denoise.polish_fidelity`);
+   :func:`~meshrepair.denoise.rules.polish_rule`, :mod:`meshrepair.denoise.polish` with the
+   solve's data term, :mod:`meshrepair.denoise.polish_fidelity`);
 2. *low-pass* of the smooth region of organic meshes with white noise
-(:mod:`meshrepair.denoise.lowpass`);
+   (:mod:`meshrepair.denoise.lowpass`);
 3. *tangential re-anchoring* of the smooth region (:data:`REANCHOR`,
-:mod:`meshrepair.denoise.reproject`);
+   :mod:`meshrepair.denoise.reproject`);
 4. *organic finish*: one-ring guidance, then the re-integration from the input
    (:mod:`meshrepair.denoise.organic`, :func:`~meshrepair.denoise.rules.guidance_rule`,
    :func:`~meshrepair.denoise.rules.reintegrate_rule`);
-4b. *longer low-pass* where the result is smooth at the mesh's resolution (round 11c,
-   :mod:`meshrepair.denoise.coarse`);
+4b. *longer low-pass* where the result is smooth at the mesh's resolution
+   (:mod:`meshrepair.denoise.coarse`);
 5. *CAD finish*: the one-ring guidance on CAD parts (:mod:`meshrepair.denoise.cadfinish`);
 6. *crease sharpening* for correlated noise (:func:`~meshrepair.denoise.rules.sharpen_rule`,
    :mod:`meshrepair.denoise.modes`).
 
 The rules are mutually exclusive where they would act on the same faces (the organic and CAD
 finishes need white noise, the sharpening correlated noise). The unfolding of faces still folded
-in the result runs after these steps, in :mod:`meshrepair.denoise`.
+in the result runs after these steps, in :mod:`meshrepair.denoise.execute`.
 """
 
 from __future__ import annotations
@@ -42,24 +41,22 @@ from meshrepair.denoise.rules import (
 log = logging.getLogger("meshrepair.denoise.api")
 
 POLISH_DATA = True
-"""The polish's vertex step keeps the fidelity to the solve's data (round 9b,
-:mod:`meshrepair.denoise.polish_fidelity`): gcn_fandisk_n6 MSAE 51.5 -> 46.5, E_a 4.17 -> 3.94°."""
+"""The polish's vertex step keeps the fidelity to the solve's data: a forward-backward step, the
+Sun et al. step then the proximal map of ``(η/2)‖x − V⁰‖²``
+(:mod:`meshrepair.denoise.polish_fidelity`), so the polish cannot drift from the data."""
 
 REANCHOR = True
 REANCHOR_MAX_RATIO = 0.6
 """Tangential re-anchoring of the smooth region after the solve
-(:mod:`meshrepair.denoise.reproject`):
-the result's vertices outside the crease-supported region slide along the result surface
-towards the input's closest points, with the minimum-variance weights of
-:func:`meshrepair.denoise.reproject.blend_weights`, when the residual tangential ratio
-:func:`meshrepair.denoise.reproject.residual_tangential_ratio` reads noise along the normals
-(``ρ_t < 0.6``) and the noise is not heavy (``γ̂ ≤ HEAVY_NOISE``). It runs before
-:func:`unfold_result`, whose probe check then judges the final positions. Measured in
-docs/parameters.md (issue 12, round 5): nllr_igea MSAE 230.7 → 222.4, E_V ratio 1.58 → 1.13;
-nllr_nicolo E_V 1.22 → 1.07; every CAD row within ±0.2 %. Round 6: the targets are smoothed
-tangentially (:func:`meshrepair.denoise.reproject.tangential_smooth`, the displacement from the
-input):
-igea 222.4 → 218.8, E_V ratio 1.13 → 1.11, every hold-out row within +0.4 %."""
+(:mod:`meshrepair.denoise.reproject`): the result's vertices outside the crease-supported region
+slide along the result surface towards the input's closest points, with the minimum-variance
+weights of :func:`meshrepair.denoise.reproject.blend_weights`, when the residual tangential
+ratio :func:`meshrepair.denoise.reproject.residual_tangential_ratio` reads noise along the
+normals (``ρ_t < 0.6``) and the noise is not heavy (``γ̂ ≤ HEAVY_NOISE``); the targets are
+smoothed tangentially first (:func:`meshrepair.denoise.reproject.tangential_smooth`). The
+normal part of the noise is removed by the solve; its tangential part, which no normal-driven
+V-update sees, is what the re-anchoring takes back towards the data. It runs before
+:func:`unfold_result`, whose probe check then judges the final positions."""
 
 
 def _reanchor_smooth(V_in, V_out, F, topo, sup_v, gamma, info):
@@ -68,7 +65,7 @@ def _reanchor_smooth(V_in, V_out, F, topo, sup_v, gamma, info):
     from meshrepair.denoise.reproject import reanchor, residual_tangential_ratio
 
     ratio = residual_tangential_ratio(V_out, V_in, F)
-    info["reanchor_ratio"] = ratio  # read at the ungraded data weight (round 11n)
+    info["reanchor_ratio"] = ratio  # read at the ungraded data weight
     ratio = reanchor_ratio_at_ungraded(ratio, info.get("lambda_gain", 1.0))
     if not (ratio < REANCHOR_MAX_RATIO) or gamma > HEAVY_NOISE:
         return V_out
@@ -83,23 +80,20 @@ def _reanchor_smooth(V_in, V_out, F, topo, sup_v, gamma, info):
 
 
 REINTEGRATE_KEEPS_FOLDS = True
-"""After the re-integration from the input (round 9) of Gaussian noise along the normals the
-faces folded in the result are the input's own layout, folded in the truth too (nllr_igea: 83
-against the truth's 74 and the input's 296), and are kept: unfolding them measured igea MSAE
-196.9 → 220.5, E_V 2.58e-05 → 3.30e-05. Impulsive noise folds faces around its thrown
-vertices, and these are still unfolded (nllr_nicolo 76.8 kept, 66.8 unfolded; pierrot 53.6 /
-58.3)."""
+"""After the re-integration from the input of Gaussian noise along the normals, the faces
+folded in the result follow the input's own vertex layout (a layout the truth shares), so they
+are kept; impulsive noise folds faces around its thrown vertices, and those are unfolded."""
 
 
 REINTEGRATE_POST_STEPS = 5
-"""Sun et al. steps of the guidance pass that follows the re-integration (round 9): the
-re-integrated vertices carry the input's one-ring jitter along the normals that ``k`` steps
-left; one more filter pass takes it (nllr_igea E_a 9.397 → 9.351°, nicolo 5.545 → 5.351°,
-pierrot 4.776 → 4.763°; MSAE 196.9 → 196.8, 66.8 → 64.5, 58.3 → 60.0)."""
+"""Sun et al. steps of the guidance pass that follows the re-integration: the re-integrated
+vertices carry the input's one-ring jitter along the normals that the ``k`` steps left, and one
+more filter pass of these steps removes it."""
 
 
 def _organic_finish(V_in, V_out, F, topo, M_E, gamma, impulsive, ww, info):
-    """Round 9 (:mod:`meshrepair.denoise.organic`): the one-ring guidance filter on organic meshes
+    """The organic finish (:mod:`meshrepair.denoise.organic`): the one-ring guidance filter on
+    organic meshes
     (:func:`guidance_rule`), then the re-integration from the input (:func:`reintegrate_rule`);
     records its decisions in ``info``."""
     from meshrepair.denoise.organic import guidance_filter, reintegrate, residual_level
@@ -118,7 +112,7 @@ def _organic_finish(V_in, V_out, F, topo, M_E, gamma, impulsive, ww, info):
     k = reintegrate_rule(p, reanchored, impulsive, ratio, gamma, level)
     from meshrepair.denoise.organic_fidelity import reintegrate_allowed
 
-    if not reintegrate_allowed(info["tangential_ratio"], impulsive):  # round 10l
+    if not reintegrate_allowed(info["tangential_ratio"], impulsive):  # the data weight's gate
         k = 0
     if k:  # then one more guidance pass with half the steps (REINTEGRATE_POST_STEPS)
         from meshrepair.denoise.folds import reintegration_keeps
@@ -126,7 +120,7 @@ def _organic_finish(V_in, V_out, F, topo, M_E, gamma, impulsive, ww, info):
 
         Xr = reintegrate(V_out, V_in, F, X, steps=k)
         nr, ng = int(_folded(Xr, topo).sum()), int(_folded(X, topo).sum())
-        if reintegration_keeps(ratio, nr, ng):  # round 10s: no in-plane folds put back
+        if reintegration_keeps(ratio, nr, ng):  # no in-plane folds put back
             X = guidance_filter(Xr, F, M_E, topo, passes=1, steps=REINTEGRATE_POST_STEPS)
             info["reintegrate_steps"] = k
         else:
@@ -160,7 +154,7 @@ def finish_result(V, V_out, F, topo, M_E, *, data, sup_v, gamma, gamma_rms, impu
     (nV, 3) float64, the finished vertices
     """
     info["polished"] = 0.0
-    info.setdefault("lambda_gain", 1.0)  # round 11n: the data weight's tangential gain
+    info.setdefault("lambda_gain", 1.0)  # the data weight's tangential gain
     # the rule reads the automatic decisions only (a user-set Willmore weight is not a finding)
     pr = polish_rule(max(gamma, gamma_rms), w_cad,
                      ww if automatic else 1.0, info["noise_length"])
@@ -168,14 +162,14 @@ def finish_result(V, V_out, F, topo, M_E, *, data, sup_v, gamma, gamma_rms, impu
         from meshrepair.denoise.polish import polish as _polish
         from meshrepair.denoise.polish_fidelity import POLISH_ETA
 
-        # the vertex step keeps the solve's data term (round 9b, meshrepair.denoise.polish_fidelity)
+        # the vertex step keeps the solve's data term (meshrepair.denoise.polish_fidelity)
         V_out, info["polished"] = _polish(V_out, F, M_E, topo, rings=pr[0], tau=pr[1],
                                           passes=pr[2], data=data,
                                           eta=POLISH_ETA if POLISH_DATA else 0.0)
         log.info("polish (%d rings, %.1f deg, %d passes) on %.1f %% of the faces", *pr,
                  100 * info["polished"])
     info["lowpass_steps"] = 0
-    if sup_v is not None and automatic:  # round 9s: organic mesh, white noise
+    if sup_v is not None and automatic:  # organic mesh, white noise
         from meshrepair.denoise import lowpass as _lp
 
         if _lp.applies(info["support_fraction"], ww):
@@ -188,10 +182,10 @@ def finish_result(V, V_out, F, topo, M_E, *, data, sup_v, gamma, gamma_rms, impu
         V_out = _reanchor_smooth(V, V_out, F, topo, sup_v, max(gamma, gamma_rms), info)
     info.update(guidance_passes=0, reintegrate_steps=0, reanchor_ratio_after=float("nan"),
                 residual_level_ratio=float("nan"), reintegrate_rejected=0)
-    if sup_v is not None and automatic:  # organic finish (round 9)
+    if sup_v is not None and automatic:  # organic finish
         V_out = _organic_finish(V, V_out, F, topo, M_E, gamma, impulsive, ww, info)
     info.update(coarse_roughness=float("nan"), coarse_steps=0)
-    if sup_v is not None and automatic:  # round 11c: smooth at the mesh's resolution
+    if sup_v is not None and automatic:  # smooth at the mesh's resolution
         from meshrepair.denoise import coarse as _co
 
         gate = dict(support_fraction=info["support_fraction"], outside=info["outside_weight"],
@@ -208,7 +202,7 @@ def finish_result(V, V_out, F, topo, M_E, *, data, sup_v, gamma, gamma_rms, impu
                                            tangential=info["tangential_ratio"])
                 info["coarse_steps"] = kc
     info.update(cad_finish_passes=0, cad_finish_gated=0.0)
-    if sup_v is not None and automatic:  # CAD finish (round 9c)
+    if sup_v is not None and automatic:  # CAD finish
         from meshrepair.denoise.cadfinish import cad_finish, cad_finish_rule
 
         pc = cad_finish_rule(gamma, info["outside_weight"], ww)
@@ -221,7 +215,7 @@ def finish_result(V, V_out, F, topo, M_E, *, data, sup_v, gamma, gamma_rms, impu
         from meshrepair.denoise.modes import sharpen
         from meshrepair.denoise.rules import SHARPEN_FLAT_SUPPORT
 
-        # round 11k: a flat-supported set passes at ρ > 0.2 (meshrepair.denoise.sharpen_decision)
+        # a flat-supported set passes at ρ > 0.2 (meshrepair.denoise.sharpen_decision)
         flat = (pr[0], pr[1]) if SHARPEN_FLAT_SUPPORT and pr is not None else None
         st: dict = {}
         V_out, info["sharpened"] = sharpen(V_out, V, F, M_E, topo, rings=sr, flat=flat,

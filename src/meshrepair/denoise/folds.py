@@ -1,6 +1,6 @@
 """Checks and repairs of a denoising result: the fidelity data where the input was folded,
 faces still folded in the result (unfolded cluster by cluster where the robust probe agrees),
-and the volume test that catches a collapsed closed mesh (docs/parameters.md, rounds 2-3).
+and the volume test that catches a collapsed closed mesh (docs/parameters.md).
 
 Used by :func:`meshrepair.denoise` (which re-exports these names).
 """
@@ -15,10 +15,10 @@ UNFOLD_DATA_IMPULSIVE = True
 """Where the input had folded faces, the unfolded mesh (:func:`meshrepair.model.relax.untangle`) is
 the *start* of the solve, and the fidelity term keeps the *input* as its data ``V⁰``, except for
 impulsive noise, where the folds are made by thrown vertices and the unfolded positions are the
-better data. Umbrella unfolding moves every vertex of a folded fan tangentially as well (nllr_igea:
-2,601 of 8,268 vertices, 0.24 mean edge lengths rms), and a fidelity to it held that tangential
-error in: measured in docs/parameters.md (gcn_trim_star_n3 MSAE 117.8 → 72.8, E_V ratio 1.27 →
-0.86; fandisk γ0.7 183 → 151; held-out spot γ0.4 normal 324 → 509 is the one large loss)."""
+better data. Umbrella unfolding moves every vertex of a folded fan tangentially as well (up to
+a third of the vertices, about 0.25 mean edge lengths rms), and a fidelity to it would hold that
+tangential error in; with thrown vertices the unfolded positions are nearer the truth than the
+input (docs/parameters.md)."""
 
 
 def fidelity_data(V_input: np.ndarray, V_unfolded: np.ndarray, impulsive: bool) -> np.ndarray:
@@ -43,7 +43,7 @@ UNFOLD_DATA_CAD_SUPPORT = 0.2
 def unfolded_data_after_probe(impulsive: bool, tangential: float,
                               support_fraction: float = 1.0) -> bool:
     """Whether the main run keeps the unfolded mesh as its fidelity data, once the probe has
-    read the direction of the noise (round 9r; the probe itself runs on :func:`fidelity_data`):
+    read the direction of the noise (the probe itself runs on :func:`fidelity_data`):
 
     .. math:: V^0_{main} = \\begin{cases} V_{input} & \\text{impulsive} \\wedge
                   |C| / n_E \\ge 0.2 \\wedge r_t \\ge 0.65 \\\\
@@ -65,28 +65,22 @@ def unfolded_data_after_probe(impulsive: bool, tangential: float,
 
     * vertices thrown along the normals (impulsive noise, ``r_t < 0.65``): the raw error at the
       moved vertices is large and the unfolding removes about half of it, at a like smooth
-      error (bundled fandisk, 10 % of the vertices thrown 1.0 l: raw 0.57 → 0.33-0.35, ``W² e``
-      0.15-0.16 → 0.16-0.18 mean edge lengths; twelve impulsive 0.52 → 0.26, 0.12 → 0.12);
+      error ``W² e``;
     * a tangential part of the noise (``r_t ≥ 0.65``: in-plane moves fold faces without any
-      outlier): the raw error is not reduced (fandisk γ0.3 random 0.18 → 0.17) while its smooth
-      part grows 1.6× (0.046-0.049 → 0.075-0.077; sharp_sphere γ0.3 random 0.048 → 0.091).
+      outlier): the raw error is hardly reduced while its smooth part grows (about 1.6-2×).
 
     The direction is read on CAD parts only (``|C| / n_E ≥ 0.2``, the test of
     :func:`meshrepair.denoise.rules.outside_weight`): on organic meshes ``r_t`` also reads
-    curvature left in the probe (rocker_arm γ0.1 normal 1.13) and thrown vertices along the
-    normals read 0.75-1.53 there (nllr_nicolo 0.83, nllr_pierrot 1.53, rocker_arm with 10 %
-    thrown 0.75), whose folds are the first case above (rocker_arm 139.4 → 141.6 without this
-    test). The reading is not perfect on CAD parts either: screwdriver with thrown vertices
-    reads 0.70-0.80 (support 0.26-0.44) and takes the input as data (MSAE 208.4 → 205.9 and
-    108.4 → 108.7).
+    curvature left in the probe (above 1 for white normal noise) and thrown vertices along the
+    normals read 0.75-1.53 there, whose folds are the first case above. The reading is not
+    perfect on CAD parts either: thrown vertices near thin parts can read 0.70-0.80 and then
+    take the input as data, where the two choices measure about the same.
 
     Random-direction noise on a CAD part can read impulsive (``γ̂_rms > 1.3 γ̂``: the creases'
     curvature in the umbrella Laplacian, and the heavier tail of a Gaussian times the cosine of
-    a random direction; fandisk γ0.3 random 1.34), so :func:`fidelity_data` alone gives it the
-    unfolded data. Measured (docs/parameters.md, round 9r): fandisk γ0.3 random MSAE 20.1 →
-    17.0, seeds 2/3/5/6 17.9 / 16.9 / 28.5 / 18.6 → 14.7 / 15.5 / 23.7 / 15.2, sharp_sphere γ0.3
-    random 180.6 → 172.5; rows that do not read impulsive, or whose noise lies along the
-    normals, are unchanged.
+    a random direction), so :func:`fidelity_data` alone would give it the unfolded data; this
+    rule gives it the input. Inputs that do not read impulsive, or whose noise lies along the
+    normals, are not affected (docs/parameters.md).
     """
     if not (impulsive and UNFOLD_DATA_IMPULSIVE):
         return False
@@ -99,11 +93,10 @@ UNFOLD_RESULT = True
 """Faces still folded over in the *result* are unfolded by the same umbrella step as the input,
 cluster by cluster where the unfolded faces agree better with the robust probe's normals
 (:func:`unfold_result`). With the input as data (:func:`fidelity_data`), a fold of the input on
-a coarse mesh can survive both solves: at γ0.4 normal noise spot (2,930 vertices) kept 31 faces
-folded (errors 57-170°), a third of its MSAE. Measured in docs/parameters.md (round 3): spot
-γ0.4 normal 499 → 318, camelhead γ0.3 490 → 294, sharp_sphere 186 → 156, fandisk γ0.7 164 →
-138, gcn_fandisk_n6 82 → 66; trim_star n3 73 → 77 (without the probe check 88: its true spikes,
-whose faces meet at more than 90° in the truth too, were blunted)."""
+a coarse mesh can survive both solves, and each folded face carries a normal error of
+60-180°, so a few dozen folds can make a third of the MSAE. The per-cluster check against
+the probe keeps true spikes, whose faces meet at more than 90° in the truth too
+(docs/parameters.md)."""
 
 
 def unfold_result(V_out: np.ndarray, topo, V_ref: np.ndarray | None = None
@@ -123,7 +116,7 @@ def unfold_result(V_out: np.ndarray, topo, V_ref: np.ndarray | None = None
     .. math:: \\sum_{f \\sim K} \\angle(n_f(V_u), n_f(V_{ref}))
               < \\sum_{f \\sim K} \\angle(n_f(V_{out}), n_f(V_{ref})),
 
-    so a true spike whose faces meet at more than 90° (trim_star's) is not blunted.
+    so a true spike whose faces meet at more than 90° is not blunted.
 
     Parameters
     ----------
@@ -184,10 +177,9 @@ def _keep_consistent_clusters(V_out, V_unf, V_ref, topo):
 
 COLLAPSE_VOLUME_RATIO = 0.5
 """A closed mesh whose enclosed volume falls below this fraction of the input's is collapsed:
-measured with the defaults on the 7 closed shared meshes (fandisk, spot, trim_star, twelve,
-rocker_arm, sharp_sphere, screwdriver) at γ = 0.3, normal and random directions, the ratio stays
-in [0.9967, 1.0071], while the robust stage flattens a tetrahedron with γ = 0.1 to 1 % of its
-volume."""
+with the defaults on the closed benchmark meshes at γ = 0.3 (normal and random directions) the
+ratio stays within 1 % of 1, while the robust stage can flatten a tetrahedron with γ = 0.1 to
+1 % of its volume; 0.5 lies far from both."""
 
 
 def _volume_ratio(V: np.ndarray, V_out: np.ndarray, F: np.ndarray, report) -> float | None:
@@ -208,12 +200,12 @@ def _volume_ratio(V: np.ndarray, V_out: np.ndarray, F: np.ndarray, report) -> fl
 
 REINTEGRATE_FOLD_CHECK_RATIO = 0.3
 """Tangential ratio ``ρ_t^after`` above which the re-integration from the input is checked for
-folds the input put back (:func:`reintegration_keeps`, round 10s)."""
+folds the input put back (:func:`reintegration_keeps`)."""
 
 
 def reintegration_keeps(ratio_after: float, folded_result: int, folded_target: int) -> bool:
     """Whether the re-integration from the input (:func:`meshrepair.denoise.organic.reintegrate`,
-    round 9) is kept (round 10s, docs/parameters.md):
+    is kept:
 
     .. math:: \\text{keep} \\iff ρ_t^{after} \\le 0.3 \\;\\vee\\;
               |\\mathcal{F}(X)| \\le |\\mathcal{F}(X_g)|,
@@ -224,17 +216,16 @@ def reintegration_keeps(ratio_after: float, folded_result: int, folded_target: i
     The Sun et al. steps move each vertex along the target normals only, so ``X`` keeps the
     input's tangential offset ``t_i = P_i(V⁰_i − V_i)`` from the re-anchored result ``V``, and
     ``ρ_t^after = rms‖t‖ / rms⟨V⁰ − V, n⟩`` measures it. Noise along the normals that the
-    solve removed leaves a small ``t`` (the result's own drift, 0.14-0.19 on the three NLLR
-    inputs), and then the input's layout is the better one (round 9). A larger ``t`` may be the
-    input's own tangential noise (random-direction noise reads 0.33-0.52) or the drift around
-    thrown vertices (impulsive noise along the normals, screwdriver: 0.31). The two differ in
+    solve removed leaves a small ``t`` (the result's own drift, about 0.14-0.19), and then the
+    input's layout is the better one. A larger ``t`` may be the input's own tangential noise
+    (random-direction noise reads 0.33-0.52) or the drift around thrown vertices (impulsive
+    noise along the normals, about 0.3). The two differ in
     what the steps do: on a flat patch all target normals are equal, so a step cannot move a
     vertex within the plane, and every face the tangential noise folded over in that plane
-    stays folded, a 180° normal error each (fandisk γ0.3 random seed 4: 81 folded in the
-    input, 84 in ``X``, none in ``X_g``; MSAE 12.7 → 193.5). Folds the target does not have
-    are therefore read as the input's tangential noise put back, and ``X_g`` is kept; thrown
-    vertices along the normals fold no in-plane face (screwdriver: 5 folded in ``X``, 6 in
-    ``X_g``), so their re-integration stays.
+    stays folded, a 180° normal error each. Folds the target does not have are therefore read
+    as the input's tangential noise put back, and ``X_g`` is kept; thrown vertices along the
+    normals fold no in-plane face (``X`` has no more folds than ``X_g``), so their
+    re-integration stays.
     """
     if not ratio_after > REINTEGRATE_FOLD_CHECK_RATIO:
         return True

@@ -1,8 +1,7 @@
-"""The length of round 10h's low-pass of the input where the surface carries relief at its own
-scale (issue 12, round 11t).
+"""The length of the coarse-to-fine low-pass of the input where the surface carries relief at
+its own scale.
 
-Round 10h (:mod:`meshrepair.denoise.presmooth`) low-passes a heavily noisy organic input by ``k``
-full
+:mod:`meshrepair.denoise.presmooth` low-passes a heavily noisy organic input by ``k`` full
 Taubin λ|μ pairs before the solve, with ``k`` set by the noise level,
 
 .. math:: k = \\mathrm{round}\\bigl((γ_k/γ_p)^2\\bigr),\\qquad
@@ -10,14 +9,14 @@ Taubin λ|μ pairs before the solve, with ``k`` set by the noise level,
 
 γ̂ the level of the normal part of the noise and ``r_t`` its tangential ratio (≈ 1 for noise in
 random directions): the *full* step moves the vertices tangentially too, and on a surface
-whose curvature is resolved by the sampling (spot) the layout it pulls towards, the umbrella
+whose curvature is resolved by the sampling the layout it pulls towards, the umbrella
 operator's, is close to the truth's, so the tangential part of the noise is noise the filter
-removes and lengthens it (spot γ0.5 random wants k ≈ 40). On a surface that carries relief at
-the mesh's own scale (nicolo) that layout is *not* the truth's: the tangential pull of the
-longer filter flattens the relief instead, and the same γ̂ and r_t want k ≈ 12-21 (nicolo γ0.5
-random: 88.4 at k = 41, 84.5 at k = 16; docs/parameters.md, round 11t).
+removes and lengthens it. On a surface that carries relief at the mesh's own scale that layout
+is *not* the truth's: the tangential pull of the longer filter flattens the relief instead, and
+the same γ̂ and r_t want a filter about half as long.
 
-**The read** is round 11c's (:func:`meshrepair.denoise.coarse.curvature_roughness`) taken on the
+**The read** is the curvature variation of :func:`meshrepair.denoise.coarse.curvature_roughness`
+taken on the
 low-passed input itself, ``X = T^k V`` with the length above (the filter's own length, ∝ γ²,
 removes the noise before the read; no extra pairs, ``m = 0``), with what the filter leaves of
 the noise taken out (:func:`relief_read`):
@@ -33,11 +32,10 @@ normal part of the noise as γ̂ reads it) run through the same ``k`` pairs. ``T
 on each coordinate alike, so ``h_ε`` and ``r_ε`` estimate the share of ``h`` and ``r`` that is
 residual noise and not surface (uncorrelated with it: the energies add). Without the
 correction, on a finely sampled surface, whose curvature per ring is small, the residual makes
-up 20-23 % of ``‖h‖²`` (nicolo and spot subdivided; 1-5 % on the shared meshes themselves) and
-the read sees relief that is not there. The ratio is dimensionless, invariant to scale,
-rotation and translation (``ε`` scales with ``ℓ̄``), and 0 on a uniformly sampled sphere.
-Measured on the design rows (γ 0.5-0.6, normal and random, seeds 1-2): spot ≤ 0.16, rocker_arm
-≤ 0.18, nicolo random ≥ 0.25 (docs/parameters.md, round 11t).
+up about a fifth of ``‖h‖²`` (1-5 % on the shared meshes at their own resolution) and the read
+sees relief that is not there. The ratio is dimensionless, invariant to scale, rotation and
+translation (``ε`` scales with ``ℓ̄``), and 0 on a uniformly sampled sphere. At γ 0.5-0.6
+smooth surfaces read ≤ 0.18 and scanned relief ≥ 0.25 (docs/parameters.md).
 
 **The rule** (:func:`tangential_weight`, :func:`heavy_length`): the weight of the tangential
 part in γ_k falls from 1 to 0 as ``c̃`` goes from ``c_0`` to ``c_1``,
@@ -45,15 +43,15 @@ part in γ_k falls from 1 to 0 as ``c̃`` goes from ``c_0`` to ``c_1``,
 .. math:: w(c) = \\mathrm{clip}\\Bigl(\\frac{c_1 - c}{c_1 - c_0},\\ 0,\\ 1\\Bigr),
           \\qquad c_0 = 0.18,\\ c_1 = 0.26,
 
-and the length is round 10h's law with that weight, the constant moving with it from round
-10h's γ_p (resolved curvature) to a larger γ_r (relief at the mesh's scale; a shorter filter for
+and the length is the coarse-to-fine law with that weight, the constant moving with it from
+its γ_p (resolved curvature) to a larger γ_r (relief at the mesh's scale; a shorter filter for
 the same level, since its normal part rounds that relief too):
 
 .. math:: k' = \\mathrm{clip}\\Bigl(\\mathrm{round}\\Bigl(\\frac{γ̂^2\\,(1 + w\\min(r_t,1)^2)}
           {(γ_r + w\\,(γ_p - γ_r))^2}\\Bigr),\\ 0,\\ K_{max}\\Bigr),
           \\qquad γ_p = 0.044,\\ γ_r = 0.05,
 
-so ``w = 1`` (``c̃ ≤ c_0``, or a NaN read) is round 10h's ``k`` exactly, and ``w = 0`` sets the
+so ``w = 1`` (``c̃ ≤ c_0``, or a NaN read) is the unweighted ``k`` exactly, and ``w = 0`` sets the
 length by the normal part of the noise alone at the constant γ_r (``k' = (γ̂/γ_r)²``: ≈ 0.4 k
 for random directions, ≈ 0.75 k for noise along the normals, whose ``r_t`` is 0.1-0.3). ``k' ≤
 k`` always (both factors shrink with ``w``), and the low-passed input is ``T^{k'} V``.
@@ -72,9 +70,10 @@ NOISE_SEED = 0
 
 def relief_read(X: np.ndarray, F: np.ndarray, edges: np.ndarray, gamma: float,
                 ell: float, steps: int) -> float:
-    """``c̃`` of the module docstring on ``X = T^k V``: round 11c's ratio with the energy of
-    a white normal field of level ``γ̂ ℓ̄`` run through the same ``k`` pairs taken out of both
-    norms (NaN when nothing is left of ``‖h‖²``; ``γ̂ = 0`` gives round 11c's ``c``).
+    """``c̃`` of the module docstring on ``X = T^k V``: the ratio ``c`` of
+    :func:`meshrepair.denoise.coarse.curvature_roughness` with the energy of a white normal field
+    of level ``γ̂ ℓ̄`` run through the same ``k`` pairs taken out of both norms (NaN when nothing
+    is left of ``‖h‖²``; ``γ̂ = 0`` gives ``c`` itself).
 
     Parameters
     ----------
@@ -117,7 +116,7 @@ def tangential_weight(c: float, c0: float = C_0, c1: float = C_1) -> float:
 
 def steps_at_weight(gamma: float, tangential: float, weight: float) -> int:
     """``k = clip(round((γ̂ √(1 + w min(r_t, 1)²) / γ_p(w))²), 0, K_max)``,
-    ``γ_p(w) = γ_r + w (γ_p − γ_r)`` (round 10h's law at ``w = 1``: the length of
+    ``γ_p(w) = γ_r + w (γ_p − γ_r)`` (the unweighted law at ``w = 1``: the length of
     :func:`meshrepair.denoise.presmooth.presmooth_steps`)."""
     from meshrepair.denoise.presmooth import GAMMA_P, MAX_STEPS, effective_level
 
@@ -130,7 +129,7 @@ def steps_at_weight(gamma: float, tangential: float, weight: float) -> int:
 def heavy_length(V: np.ndarray, F: np.ndarray, edges: np.ndarray, gamma: float,
                  tangential: float, steps: int, *, Vk: np.ndarray | None = None
                  ) -> tuple[int, np.ndarray, float, float]:
-    """Round 10h's low-pass of the input with the length of the module docstring.
+    """The coarse-to-fine low-pass of the input with the length of the module docstring.
 
     Parameters
     ----------
@@ -139,7 +138,7 @@ def heavy_length(V: np.ndarray, F: np.ndarray, edges: np.ndarray, gamma: float,
     edges : (nE, 2) int64, the mesh's edges
     gamma : γ̂, the level of the normal part of the noise
     tangential : r_t, its tangential ratio
-    steps : round 10h's length ``k`` (``presmooth_steps``; > 0)
+    steps : the unweighted length ``k`` (``presmooth_steps``; > 0)
     Vk : (nV, 3) float64, optional, ``T^k V`` when the caller has it already (not modified)
 
     Returns

@@ -1,15 +1,12 @@
-"""A full-step low-pass that keeps the input's vertex layout (issue 12, round 11x).
+"""A full-step low-pass that keeps the input's vertex layout.
 
-The full Taubin low-passes of rounds 10h (:mod:`meshrepair.denoise.presmooth`, on the input) and 11c
-(:mod:`meshrepair.denoise.coarse`, on the result) move every vertex towards its neighbours'
-centroid,
-along the surface as well as across it. The shape they reach is what wins MSAE; the tangential
-part of the move is what costs E_V: it slides the vertices along the surface towards the
+The full Taubin low-passes of :mod:`meshrepair.denoise.presmooth` (on the input) and
+:mod:`meshrepair.denoise.coarse` (on the result) move every vertex towards its neighbours'
+centroid, along the surface as well as across it. The shape they reach is what wins MSAE; the
+tangential part of the move is what costs E_V: it slides the vertices along the surface towards the
 umbrella operator's preferred (uniform) layout, away from the input's. For noise along the
 normals the input's layout *is* the truth's, and the filter turns a tangential error of 0 into
-0.17-0.32 mean edge lengths (spot γ0.3 normal 0.054 → 0.165 in the coarse step, spot / nicolo /
-rocker_arm γ0.5 normal 0 → 0.25 / 0.29 / 0.32 in the input low-pass; docs/parameters.md, round
-11x), twice the normal error left.
+0.17-0.32 mean edge lengths, about twice the normal error left.
 
 **The step** (:func:`keep_layout`): keep the low-passed *surface*, resample it at the reference
 layout. With ``X = T^k A`` the filter's result, ``R`` the reference (the run's input), ``n_i`` the
@@ -43,16 +40,16 @@ or whose area is below a fifth of it, take ``X``'s position, repeated until none
 directions the reference layout carries white tangential noise ``σ``, and ``d = −b + σ`` with
 ``b`` the filter's own layout error: the half-steps average the white part out and keep what is
 common to neighbours; ``j = J_RANDOM = 3`` is the least smoothing that kept MSAE within 1 % on
-every design row (docs/parameters.md, round 11x).
+every benchmark row it was chosen on (docs/parameters.md).
 
-*Where it runs.* On round 11c's full step (:func:`meshrepair.denoise.coarse.coarse_lowpass`, the
-reference is the run's input) and on round 10h's low-passed input before the coarse-to-fine run
-(``denoise_run``; the reference is the input). That run reads its noise level and tangential
-ratio on the low-passed mesh *before* the resampling (``read_from``), as before round 11x: on
-the input's layout the tangential ratio sees the clean mesh's own layout irregularity over a tiny
-normal residual (4.6-12 against 0.4-1.3) and the run took other branches (a noisy icosphere,
-γ0.5 normal: 1.95 → 13.2; with the reading kept, 1.76). Not on round 11q's step (its held-out
-correlated rows lost MSAE: spot m = 4 γ0.5 347.0 → 368.5). docs/parameters.md, round 11x.
+*Where it runs.* On the full step of :func:`meshrepair.denoise.coarse.coarse_lowpass` (the
+reference is the run's input) and on the low-passed input before the coarse-to-fine run
+(:mod:`meshrepair.denoise.run`; the reference is the input). That run reads its noise level
+and tangential ratio on the low-passed mesh *before* the resampling (``read_from``): on the
+input's layout the tangential ratio would see the clean mesh's own layout irregularity over a
+tiny normal residual (4.6-12 against 0.4-1.3) and send the run down other branches. Not on
+the correlated-noise low-pass of :mod:`meshrepair.denoise.corrlowpass`: there the resampling
+raised the error on the held-out correlated-noise rows (docs/parameters.md).
 """
 
 from __future__ import annotations

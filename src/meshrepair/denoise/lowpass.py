@@ -1,11 +1,11 @@
 """A final low-pass step on the smooth region of organic meshes with white noise.
 
 The ADMM of energy (6) with the edge-Willmore prior removes the vertex-scale noise of a smooth
-surface but leaves its mid-frequency part (bumps of a few rings): on the synthetic noise (32)
-of docs/comparison.md a tuned Taubin filter beats the defaults on spot, nicolo and rocker_arm,
-and the same filter applied to the *result* lowers MSAE on every one of those rows (round 9s,
-docs/parameters.md). For i.i.d. (white) noise an isotropic low-pass at the right strength is
-close to optimal where the surface is smooth; the strength must grow with the noise.
+surface but leaves its mid-frequency part (bumps of a few rings): on the synthetic noise (32) of
+docs/comparison.md a tuned Taubin filter can beat the solve alone on smooth organic meshes, and
+the same filter applied to the *result* lowers MSAE there (docs/parameters.md). For i.i.d.
+(white) noise an isotropic low-pass at the right strength is close to optimal where the surface
+is smooth; the strength must grow with the noise.
 
 The step is Taubin's λ|μ filter (1995) with the uniform umbrella operator W, on the vertices
 of the smooth region S only (those outside the crease-supported region C stay the boundary
@@ -24,20 +24,19 @@ noise level ``γ̂`` (mean edge lengths), i.e. the diffusion time to ``γ̂²``:
 .. math::  k = \\max\\bigl(1, \\mathrm{round}((γ̂ / γ_1)^2)\\bigr), \\qquad γ_1 = 0.13,
 
 so ``k = 1`` up to ``γ̂ ≈ 0.16``, 4 at ``γ̂ = 0.26``, 8 at ``γ̂ = 0.37``, capped at
-:data:`MAX_STEPS`; γ_1 was read off the design rows (docs/parameters.md, round 9s): 0.10
-smooths the fine relief of nicolo γ0.2 away (68.9 → 70.4), 0.13 keeps it (69.1).
+:data:`MAX_STEPS`; γ_1 was chosen on the benchmark grid (docs/parameters.md): a smaller
+γ_1 (a longer filter) smooths fine scanned relief away, 0.13 keeps it.
 For noise along the normals (and at low noise) the displacement of each step is projected on
 the vertex normals (:func:`normal_only`): the tangential layout is left to the solve and to
 the re-anchoring of :mod:`meshrepair.denoise.reproject` that follows, so E_V does not grow (with the
-full step it grew by up to 90 %: rocker_arm γ0.1 normal, nicolo γ0.2).
+full step it grows by up to 90 % at low noise).
 
 It runs only where the model's smooth prior is the whole story: crease support on less than
 :data:`meshrepair.denoise.rules.CAD_SUPPORT` of the edges (an organic mesh) and noise found
 white (Willmore weight 1; correlated scanner noise has the polish of
 :mod:`meshrepair.denoise.polish`).
 Impulsive noise is included: the robust fidelity and the solve have removed the thrown vertices
-by then, and ``γ̂`` (the MAD level) reads the Gaussian part (nllr_nicolo 79.6 → 78.2, synthetic
-impulsive rocker_arm −5 %, nllr_pierrot +0.3 %).
+by then, and ``γ̂`` (the MAD level) reads the Gaussian part.
 """
 
 from __future__ import annotations

@@ -2,9 +2,9 @@
 support them.
 
 On correlated (scanner) noise the solve and the polish of :mod:`meshrepair.denoise.polish` leave the
-planes flat but the creases *rounded* over a band of a few noise lengths (the real Kinect
-pyramid: faces 2-5 rings from the truth's creases had a mean error of 6.6-13.2° against
-MeshTGV's 4.7-7.7°, docs/parameters.md round 9k). Their sharp-edge mask cannot catch them: no
+planes flat but the creases *rounded* over a band of a few noise lengths (on a real scan the
+faces 2-5 rings from the true creases keep about twice the normal error of a TGV result).
+Their sharp-edge mask cannot catch them: no
 single edge of a rounded band is creased. This step sharpens such bands at the scale of the
 noise and keeps the change only where the input's own vertices are closer to it.
 
@@ -35,16 +35,13 @@ term),
 .. math:: E_s(x) = \\sum_f \\sum_{i \\in f} \\big(n'_f \\cdot (x_i - c_f)\\big)^2
           + \\frac{η_s}{2} \\sum_i \\|x_i - V^0_i\\|^2, \\qquad η_s = 0.007,
 
-the energy the polish of round 9b descends (``η = 0.002``, 300 steps) with the modes as the
-target normals. *Like with like*: the polish's data term pulls the result ``V`` towards the
-data, and a candidate
-built by plain Sun steps (``η_s = 0``, round 9k as first written) loses that pull: it was
-farther from ``V⁰`` (Σ‖V⁰ − X‖² = 814 against 748 squared edge lengths on the real Kinect
-pyramid, and on every patch down to 2 edge lengths) although its normals were better (E_a
-5.89° against 6.91°), so the data test refused it everywhere. With the data term in
-the candidate's own step both sides of the test carry the same pull; ``η_s`` is larger than
-the polish's because the candidate has 60 steps, not 300 (docs/parameters.md, round 9k on
-the merge with round 9b).
+the energy the polish of :mod:`meshrepair.denoise.polish` descends (``η = 0.002``, 300 steps)
+with the modes as the target normals. *Like with like*: the polish's data term pulls the
+result ``V`` towards the data, and a candidate built by plain Sun steps (``η_s = 0``) lacks
+that pull: it lies farther from ``V⁰`` even where its normals are better, and the data test
+below would refuse it everywhere. With the data term in the candidate's own step both sides of
+the test carry the same pull; ``η_s`` is larger than the polish's because the candidate has 60
+steps, not 300.
 
 **Data test.** ``X`` is kept per connected set ``S`` (through mesh edges) of the vertices it
 moves by more than ``eps`` mean edge lengths, when it lowers the fidelity there,
@@ -54,17 +51,15 @@ moves by more than ``eps`` mean edge lengths, when it lowers the fidelity there,
 ``V⁰`` the input, ``V`` the result before this step. A rounded crease lies off the data (the
 prior pulled it inwards), its sharpened version lies on it; a smooth surface that the mean
 shift would facet lies on the data already and its facets leave it, so they are refused:
-synthetic Kinect-like noise on bunny keeps the result unchanged, the real Kinect pyramid
-keeps 77 % of its vertices (synthetic fandisk 68 %). The test reads
-``ρ_S = ⟨X − V, V⁰ − V⟩_S / ‖X − V‖²_S > 1/2``; the Kinect's large set passes at
-``ρ = 0.500``, a thin margin (docs/parameters.md): where it fails the result is the
-unsharpened one, never worse.
+under synthetic scanner-like noise a smooth organic surface keeps the result unchanged. The
+test reads ``ρ_S = ⟨X − V, V⁰ − V⟩_S / ‖X − V‖²_S > 1/2``, the projection of the data's pull
+on the candidate's move: where it fails the result is the unsharpened one, never worse.
 
-**Flat support (round 11k).** Under correlated noise the test is biased against ``X`` (the
+**Flat support.** Under correlated noise the test is biased against ``X`` (the
 result keeps low-frequency noise that the sharpened planes remove), so on a set whose
 vertices lie mostly on flat faces of the result (``φ_S ≥ 0.45``, the polish's flatness gate
 at half its threshold) ``ρ_S > 0.2`` suffices: :mod:`meshrepair.denoise.sharpen_decision` has the
-maths and the measured margins (the Kinect: ``ρ = 0.500``, ``φ = 0.58``).
+maths and the margins.
 """
 
 from __future__ import annotations
@@ -82,7 +77,7 @@ MODE_PASSES = 2
 MODE_EPS = 0.01
 MODE_ETA = 0.007
 """``η_s``: the data weight of the candidate's vertex step (forward-backward steps of
-:mod:`meshrepair.denoise.polish_fidelity`, on the merge with round 9b; module docstring)."""
+:mod:`meshrepair.denoise.polish_fidelity`; module docstring)."""
 MODE_VSTEPS = 30
 """Vertex steps per pass of the candidate."""
 MODE_RHO_FLAT = 0.2
@@ -198,12 +193,12 @@ def sharpen(V: np.ndarray, V0: np.ndarray, F: np.ndarray, sharp: np.ndarray, top
     rings : ``r`` of ``K(f)``
     passes, sigma_s, cons : see the module docstring
     eps : the data test's motion threshold, mean edge lengths
-    eta : float >= 0, the candidate's data weight per vertex step ``η_s`` (0: plain Sun steps,
-        round 9k as first written)
+    eta : float >= 0, the candidate's data weight per vertex step ``η_s`` (0: plain Sun
+        steps)
     flat : ``(r_p, τ_p)``, optional: the polish's ring count and flatness threshold (degrees);
         the flat support is :func:`meshrepair.denoise.polish.flat_gate` on ``V`` at ``r_p`` rings
         and
-        ``MODE_FLAT_TAU τ_p`` (:mod:`meshrepair.denoise.sharpen_decision`, round 11k); None: the
+        ``MODE_FLAT_TAU τ_p`` (:mod:`meshrepair.denoise.sharpen_decision`); None: the
         test
         ``ρ_S > 1/2`` alone
     stats : dict, optional, filled with the largest set's ``rho``, ``flat`` and ``size``

@@ -1,5 +1,5 @@
 """The data weight of smooth organic meshes at low noise, and the input's tangential layout
-(issue 12, round 10l).
+.
 
 **Fidelity weight.** The default weight of the data term of energy (6),
 :func:`meshrepair.denoise.rules.lambda_from_noise`, is ``λ = clip(0.02 / γ̂², 0.05, 1)``. The
@@ -7,9 +7,8 @@ term ``(λ/2)‖V − V⁰‖²`` is the negative log-likelihood of white Gaussi
 (mean edge lengths) up to the prior's scale, so the weight grows as ``1/γ̂²`` (for a quadratic
 prior and a signal whose spectrum is the prior's inverse, ``λ = c/σ²`` is exactly the Wiener
 filter: tests/test_organic_fidelity.py); the upper cap ``λ ≤ 1`` (reached at ``γ̂ ≈ 0.14``)
-was set on CAD parts. On a smooth organic surface at low noise the capped weight lets the
-edge-Willmore prior flatten relief the noise did not hide (nicolo γ0.1 normal: MSAE 52.9 with
-λ = 1, 45.1 with λ = 4.7; docs/parameters.md, round 10l). On meshes that are not CAD parts
+suits CAD parts. On a smooth organic surface at low noise the capped weight lets the
+edge-Willmore prior flatten relief the noise did not hide. On meshes that are not CAD parts
 (crease support below :data:`meshrepair.denoise.rules.CAD_SUPPORT` of the edges), with white
 (Willmore weight 1 and correlation ratio ``ρ <`` :data:`RHO_WHITE`), non-impulsive noise, the
 main run uses the law without the cap,
@@ -21,44 +20,41 @@ main run uses the law without the cap,
 ``γ̂ ≥ 0.1414``. ``γ̂`` is a level of the offsets *along the normals*; noise with a tangential
 part (``r_t ≥`` :data:`meshrepair.denoise.rules.TANGENTIAL_MAX`,
 :func:`meshrepair.denoise.scale.tangential_ratio`) puts part of its variance where the prior does
-not
-act (the tangential layout), and the design rows want the double weight there (rocker_arm γ0.3
-random 64.1 → 60.8, nicolo γ0.3 random 65.2 → 63.6 with ``c = 0.04``). The robust probe that
-decides the crease support keeps the default: its decisions do not change.
+not act (the tangential layout), so the normal level under-reads the noise the data term
+sees; the constant doubles there (``c = 0.04``, chosen on the benchmark grid). The robust probe
+that decides the crease support keeps the default: its decisions do not change.
 Correlated noise that the Willmore rule misses (it reads ``r_t ≥ 0.65``) reads ``ρ ≥ 1.42``
-on the held-out correlated rows, white noise ``ρ ≤ 1.36``: hence :data:`RHO_WHITE` = 1.4 (a
-larger λ keeps correlated bumps: rocker_arm correlated m=4 370.5 → 386.5 without this test).
+on the benchmark grid, white noise ``ρ ≤ 1.36``: hence :data:`RHO_WHITE` = 1.4 between them (a
+larger λ keeps correlated bumps).
 
-**Graded by the tangential ratio** (round 11n, :func:`tangential_gain`). The tangential ratio
+**Graded by the tangential ratio** (:func:`tangential_gain`). The tangential ratio
 ``r_t`` is the robust level of the tangential part of the input's high-passed umbrella residual
 over that of its normal part; for Gaussian noise of standard deviation σ_n along the normal and
 σ_t per tangential axis on a regular layout it reads exactly ``√(ln 2) σ_t/σ_n`` (0.83 for
-isotropic, random-direction noise; tests/test_organic_fidelity_graded.py), and 1.0-1.2 on the
-organic meshes at random-direction γ0.3. Above 1 the tangential part dominates the normal one
-by more than random-direction noise itself gives: at low noise the input's own irregular
-layout (nicolo γ0.1 random 1.85, rocker_arm γ0.1 random 2.22) and its curvature leaking into
-the one-ring estimate ``γ̂``, which then over-reads the noise that the prior must remove; the
-design rows want a data weight growing with ``r_t`` there (nicolo γ0.1 random MSAE 38.96 at the
-cap λ = 8, 34.44 at 18.9, 32.57 at 37.8; spot γ0.3 random, ``r_t = 1.00``, wants the round-10l
-weight). The law of the main run, for ``r_t ≥ 0.65``,
+isotropic, random-direction noise; tests/test_organic_fidelity_graded.py), and 1.0-1.2 on
+organic meshes with random-direction noise of 0.3 mean edge lengths. Above 1 the tangential
+part dominates the normal one by more than random-direction noise itself gives: at low noise
+the input's own irregular layout (up to 1.9-2.3) and its curvature leak into the one-ring
+estimate ``γ̂``, which then over-reads the noise that the prior must remove, so the data weight
+grows with ``r_t`` there. The law of the main run, for ``r_t ≥ 0.65``,
 
 .. math:: λ = \\mathrm{clip}\\bigl(g\\, c / γ̂^2,\\; 0.05,\\; g\\, λ_{max}\\bigr), \\qquad
           g(r_t) = \\tfrac12 \\bigl(1 + \\max(r_t, 1)^2\\bigr),
 
-is round 10l's for ``r_t ≤ 1`` (``g = 1``) and multiplies its constant and its cap by
+is the ungraded law for ``r_t ≤ 1`` (``g = 1``) and multiplies its constant and its cap by
 ``(1 + r_t²)/2`` above (``g c = 0.02 (1 + r_t²)``: the normal constant times the ratio of the
 total to the normal part of the residual as ``r_t`` measures them), for ``r_t`` up to
 :data:`GAIN_RATIO_MAX` = 2.5 (above it ``g = 1``: not a measurement). The run on a low-passed
 input (:mod:`meshrepair.denoise.presmooth`) keeps ``g = 1``: its ``r_t`` reads the filter's residue,
-not the input's noise (rocker_arm γ0.5 random 75.7 → 76.7 with the gain there).
+not the input's noise.
 
 **Input layout.** The re-integration from the input of :mod:`meshrepair.denoise.organic` restarts
 from
 the input's *tangential* positions (NLLR's vertex update): right when the noise lies along the
 normals, wrong when the noise has a tangential part of its own. With the stronger data weight
 the solve's result stays closer to the input, its residual reads more normal, and the
-re-anchoring and then the re-integration can fire on random-direction noise (nicolo γ0.1
-random: 57.0 with it at λ = 3, 42.8 without). :func:`reintegrate_allowed` keeps it off when the
+re-anchoring and then the re-integration could fire on random-direction noise and restore
+its tangential part. :func:`reintegrate_allowed` keeps it off when the
 input's own tangential ratio (:func:`meshrepair.denoise.scale.tangential_ratio`, read on the probe)
 says the noise is not along the normals, ``r_t ≥`` :data:`meshrepair.denoise.rules
 .TANGENTIAL_MAX`, unless the noise is impulsive (the thrown vertices are what the
@@ -75,10 +71,10 @@ LAMBDA_SCALE_TANGENTIAL = 0.04
 LAMBDA_MAX = 8.0
 RHO_WHITE = 1.4
 GAIN_RATIO_MAX = 2.5
-"""Largest ``r_t`` :func:`tangential_gain` trusts: the largest ratio read on a shared mesh with
-random-direction noise is 2.33 (screwdriver γ0.1); above it the robust levels are not a
-measurement (a 4-vertex tetrahedron, with no vertex two rings inside, reads 18.6, and the
-gain there, λ 3.3 → 566, keeps a collapsed result) and the gain is 1."""
+"""Largest ``r_t`` :func:`tangential_gain` trusts: random-direction noise on the benchmark
+grid reads at most about 2.3; above it the robust levels are not a measurement (a 4-vertex
+tetrahedron, with no vertex two rings inside, reads 18.6, and a gain there would keep a
+collapsed result) and the gain is 1."""
 
 
 def organic_lambda(gamma: float, tangential: float = 0.0, *,
@@ -86,9 +82,9 @@ def organic_lambda(gamma: float, tangential: float = 0.0, *,
     """``λ = clip(c / γ̂², 0.05, λ_max)`` (module docstring); ``γ̂`` in mean edge lengths,
     ``c = 0.02`` for noise along the normals (``r_t < 0.65``), ``c = 0.04`` otherwise.
 
-    ``graded`` (round 11n, :func:`tangential_gain`): for ``r_t ≥ 0.65`` both ``c`` and
+    ``graded`` (:func:`tangential_gain`): for ``r_t ≥ 0.65`` both ``c`` and
     ``λ_max`` are multiplied by ``g(r_t) = (1 + max(r_t, 1)²) / 2`` (1 for ``r_t ≤ 1``: the
-    law of round 10l unchanged there). The run on a low-passed input
+    ungraded law there). The run on a low-passed input
     (:mod:`meshrepair.denoise.presmooth`) passes ``graded=False``: its ``r_t`` reads the filter's
     residue, not the input's noise. A non-finite or non-positive ``γ̂`` (a clean mesh)
     returns ``λ_max`` (times ``g``)."""
@@ -103,13 +99,13 @@ def organic_lambda(gamma: float, tangential: float = 0.0, *,
 
 
 def tangential_gain(tangential: float) -> float:
-    """``g(r_t)`` of round 11n: 1 below :data:`meshrepair.denoise.rules.TANGENTIAL_MAX` (noise
-    along the normals) and for ``0.65 ≤ r_t ≤ 1`` (random-direction noise at moderate level
-    reads 0.86-1.22), ``(1 + r_t²) / 2`` above 1: where the tangential part of the input's
-    high-passed umbrella residual dominates its normal part (low random-direction noise on an
-    irregular layout: nicolo γ0.1 random reads 1.85, rocker_arm γ0.1 random 2.22), up to
-    :data:`GAIN_RATIO_MAX` (``g ≤ 3.625``); a ratio above it is not a measurement and, like a
-    NaN ratio (no probe), gives 1 (round 10l's law)."""
+    """``g(r_t)`` of the module docstring: 1 below
+    :data:`meshrepair.denoise.rules.TANGENTIAL_MAX` (noise along the normals) and for ``0.65 ≤
+    r_t ≤ 1`` (random-direction noise at moderate level reads 0.86-1.22), ``(1 + r_t²) / 2``
+    above 1: where the tangential part of the input's high-passed umbrella residual dominates
+    its normal part (low random-direction noise on an irregular layout reads up to about 2.3),
+    up to :data:`GAIN_RATIO_MAX` (``g ≤ 3.625``); a ratio above it is not a measurement and,
+    like a NaN ratio (no probe), gives 1 (the ungraded law)."""
     from meshrepair.denoise.rules import TANGENTIAL_MAX
 
     r = float(tangential)
@@ -131,10 +127,10 @@ def reanchor_ratio_at_ungraded(ratio: float, gain: float) -> float:
     .residual_tangential_ratio`) read at the ungraded data weight: ``ρ_t √g``. A data weight
     raised by ``g`` keeps the solve's result nearer the input, whose tangential offsets the
     prior does not remove, so the tangential part of the residual shrinks against its normal
-    part (measured ×0.875 on nicolo γ0.2 random at ``g = 1.35``, ``1/√g = 0.862``): the
-    residual then reads "along the normals" for noise that is not, and the re-anchoring slides
-    the vertices towards the input's noisy tangential positions (docs/parameters.md, round
-    11n). ``√g`` undoes that shrinkage, so the re-anchoring decides as at round 10l's weight."""
+    part by about ``1/√g``: the residual then reads "along the normals" for noise that is not,
+    and the re-anchoring would slide the vertices towards the input's noisy tangential
+    positions. ``√g`` undoes that shrinkage, so the re-anchoring decides as at the ungraded
+    weight."""
     return float(ratio) * float(np.sqrt(max(float(gain), 1.0)))
 
 

@@ -1,8 +1,8 @@
 """Heavy-noise polish: a crease-bounded bilateral normal filter on the flat patches of a CAD part.
 
 After the feature stage the sharp-edge mask ``M_E`` has converged, but on heavy noise (γ̂ >
-0.33) the planar patches of a CAD part keep a ripple of a few degrees (gcn_fandisk_n6: mean
-face error 3.4° away from the truth's creases against GCN-Denoiser's 2.5°). This step filters
+0.33) the planar patches of a CAD part keep a ripple of a few degrees away from the creases.
+This step filters
 the result's face normals over a neighbourhood that never crosses ``M_E`` and only on faces
 whose neighbourhood is already flat, then moves the vertices to the filtered normals.
 
@@ -30,11 +30,12 @@ features whose curvature within ``r`` rings is larger than τ) keep their normal
 filtered normals as ``N``), each ``x_i ← x_i + (1/|F_i|) Σ_{f ∋ i} n'_f (n'_f · (c_f − x_i))``,
 20 per filter pass, ``passes`` passes. A mesh whose faces already have the normals ``n'`` is a
 fixed point (``c_f − x_i`` lies in the face's plane). With ``data`` and ``eta > 0`` each step
-is followed by the prox of a data term (:mod:`meshrepair.denoise.polish_fidelity`, round 9b; what
+is followed by the prox of a data term (:mod:`meshrepair.denoise.polish_fidelity`; what
 :func:`meshrepair.denoise` does).
 
 Defaults: ``r = 4``, ``τ = 5°``, ``passes = 10`` (:func:`meshrepair.denoise.api.polish_rule`
-scales them with the noise's correlation length); measured in docs/parameters.md (round 5).
+scales them with the noise's correlation length); chosen on the benchmark grid
+(docs/parameters.md).
 """
 
 from __future__ import annotations
@@ -151,7 +152,7 @@ def polish(V: np.ndarray, F: np.ndarray, sharp: np.ndarray, topo, *, rings: int 
     topo : Topology of the mesh
     rings, tau, passes : ``r``, ``τ`` (degrees) and the number of filter passes
     data : (nV, 3) float64, optional, the fidelity data ``V⁰``; with ``eta > 0`` the vertex
-        step keeps a data term (:mod:`meshrepair.denoise.polish_fidelity`, round 9b)
+        step keeps a data term (:mod:`meshrepair.denoise.polish_fidelity`)
     eta : float >= 0, its weight per step (0: the vertex step of the module docstring)
 
     Returns

@@ -1,14 +1,12 @@
-"""The polish's vertex step with the fidelity kept: forward-backward splitting (round 9b).
+"""The polish's vertex step with the fidelity kept: forward-backward splitting.
 
 The polish of :mod:`meshrepair.denoise.polish` moves the vertices to the filtered face normals
-``n'``
-by Sun et al. steps, the V-subproblem (26) of the paper *with* ``λ = 0``: nothing ties the
-polished vertices to the data any more. On a heavy-noise CAD part that lets two things the
-solve left stand: the narrow strips between a detected crease and a soft one tilt (22°
-creases of gcn_fandisk_n6 come out at 65-75°, faces within one ring of them 13.6° off
-against GCN-Denoiser's 5.1°), and the vertices keep the solve's tangential drift (0.16 mean
-edge lengths outside the crease-supported region, the input's own tangential error being
-0.001). Both are errors the *data* do not support, averaged over a few rings.
+``n'`` by Sun et al. steps, the V-subproblem (26) of the paper *with* ``λ = 0``: nothing ties
+the polished vertices to the data any more. On a heavy-noise CAD part that lets two things the
+solve left stand: the narrow strips between a detected crease and a soft one tilt (a shallow
+crease comes out several times steeper), and the vertices keep the solve's tangential drift
+(about 0.16 mean edge lengths outside the crease-supported region where the input has almost
+none). Both are errors the *data* do not support, averaged over a few rings.
 
 **Energy.** For fixed target normals ``n'`` (one filter pass) the vertex step now descends
 
@@ -34,9 +32,8 @@ So the data correct what is consistent over many vertices, not the per-vertex no
 
 ``η = POLISH_ETA = 0.002`` per step, ``POLISH_FIT_STEPS = 30`` steps per filter pass (the
 polish's 10 passes give 300 steps, so the data's weight in the fixed point is what matters,
-not the count); both scale-free (positions enter linearly). Chosen on the design set
-gcn_fandisk_n6, fandisk γ0.7 / γ0.4 and the Kinect scan, measured in docs/parameters.md
-(round 9b).
+not the count); both scale-free (positions enter linearly). Chosen on heavy-noise CAD rows
+and a real scan of the benchmark grid (docs/parameters.md).
 """
 
 from __future__ import annotations

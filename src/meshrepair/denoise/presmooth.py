@@ -1,24 +1,20 @@
-"""Heavy noise on smooth organic meshes: a low-pass of the *input* before the solve (issue 12,
-round 10h).
+"""Heavy noise on smooth organic meshes: a low-pass of the *input* before the solve.
 
 At heavy white noise (γ ≳ 0.3 mean edge lengths) on a smooth organic surface the ADMM of energy
 (6) started from the noisy input freezes part of the noise in: the edge-Willmore prior acts on
 the normals of the *noisy* faces, the V-step follows them and the vertices drift tangentially
-by 0.18 mean edge lengths on spot and nicolo γ0.5 normal noise, whose input has no tangential
-error at all. No finish after the solve takes that back (the best low-pass length and
-guidance passes chosen on the truth reach spot γ0.5 normal 126, the tuned volume-keeping
-relaxation 86; docs/parameters.md, round 10h). An isotropic low-pass of the input itself does
-not freeze it: Taubin's filter alone, at the right length, already reaches 107 there. So the
-schedule becomes coarse-to-fine: the low-pass removes the noise's wavelengths up to a few rings
+(about 0.2 mean edge lengths at γ 0.5 normal noise, whose input has no tangential error at
+all). No finish after the solve takes that back. An isotropic low-pass of the input itself
+does not freeze it. So the schedule becomes coarse-to-fine: the low-pass removes the noise's
+wavelengths up to a few rings
 (√k), and the whole variational model (probe, regions, solve, finishes) then runs on the
 low-passed mesh, whose remaining noise is small (γ̂ 0.03-0.06), to restore what the isotropic
 filter rounded.
 
 **The low-pass.** Taubin's λ|μ filter (1995), the full (tangential too) step of
 :func:`meshrepair.denoise.lowpass.taubin_region` on every vertex (the probe's crease-supported
-region C
-is not kept fixed: at this noise level on an organic mesh its chains are noise, 9 % of spot's
-edges at γ0.5, and fixing them leaves their vertices as spikes, MSAE 85.9 → 187.7):
+region C is not kept fixed: at this noise level on an organic mesh its chains are noise, and
+fixing them would leave their vertices as spikes):
 
 .. math:: V \\leftarrow V + λ (WV - V),\\quad V \\leftarrow V + μ (WV - V),
           \\qquad λ = 0.5,\\ μ = -0.53,
@@ -36,8 +32,8 @@ where γ̂ is the MAD level of the normal part of the umbrella Laplacian
 (:func:`meshrepair.model.noise.noise_statistics`) and ``r_t`` the tangential ratio of
 :func:`meshrepair.denoise.scale.tangential_ratio` read on the probe (0.1-0.4 for noise along the
 normals, ≈ 1 for random directions). γ̂ sees only the normal part of the noise; the full step
-also removes the tangential part, which counts half in ``γ_k`` (measured: with the whole
-tangential part, ``c = 2`` below, nicolo γ0.5 random 88.4 → 93.9).
+also removes the tangential part, which counts half in ``γ_k`` (the whole tangential part,
+``c = 2`` below, over-smooths random-direction inputs on the benchmark grid).
 
 **The gate** (:func:`presmooth_steps`): an organic mesh (crease support below
 :data:`meshrepair.denoise.rules.CAD_SUPPORT`, outside weight 1), white noise (Willmore weight 1),
@@ -46,18 +42,14 @@ not impulsive (Taubin's mean would spread a thrown vertex over its rings) and he
 .. math:: γ_t = γ̂\\,\\sqrt{1 + 2 \\min(r_t, 1)^2} > γ_{min} = 0.32,
 
 ``γ_t`` the total level of the displacement: a random-direction displacement of level γ has
-normal part γ/√3 (what γ̂ reads) and r_t reads ≈ 1 on it, so ``γ_t ≈ γ̂√3 ≈ γ``. γ_min was
-read off the design rows and the rows where the step loses (docs/parameters.md, round 10h):
-it fires from γ_t 0.336 (spot γ0.5 random) and not at 0.305-0.311 (rocker_arm γ0.3 normal,
-nicolo γ0.4 random: +4-5 % and +2 % if it fired).
+normal part γ/√3 (what γ̂ reads) and r_t reads ≈ 1 on it, so ``γ_t ≈ γ̂√3 ≈ γ``. γ_min lies
+between the benchmark rows where the step pays (γ_t ≥ 0.336) and those where it loses
+(γ_t 0.305-0.311; docs/parameters.md).
 
 The run on the low-passed mesh skips the polish of :mod:`meshrepair.denoise.polish`: what is left
-after
-the filter is correlated by the filter itself, and the polish at that scale is the dominant cost
-(spot subdivided twice, γ0.5, 47k vertices: defaults without the rule 2.7 s CPU, 0.30 GB, MSAE
-324.5; with it and the polish 11.1 s, 1.10 GB, 72.7; without the polish 3.5 s, 0.40 GB, 58.9;
-treating the noise as white, Willmore weight 1, 2.2 s but 84.5 and a noisy sphere worse than
-without the rule).
+after the filter is correlated by the filter itself, and the polish at that scale is the
+dominant cost (about three times the run's time and memory) while it does not lower the error
+there.
 """
 
 from __future__ import annotations
@@ -83,8 +75,8 @@ def presmooth_steps(gamma: float, tangential: float, *, support_fraction: float,
                     gamma_p: float | None = None, gamma_min: float | None = None,
                     max_steps: int | None = None, heavy: bool = False) -> int:
     """λ|μ pairs ``k`` of the module docstring, 0 when the gate does not fire. ``heavy``: the
-    noise is known to be heavy for this mesh from another read than γ_t (round 11d,
-    :func:`meshrepair.denoise.crease_network.heavy_from_network`), so the level test is not
+    noise is known to be heavy for this mesh from another read than γ_t
+    (:func:`meshrepair.denoise.crease_network.heavy_from_network`), so the level test is not
     asked."""
     from meshrepair.denoise.rules import CAD_SUPPORT
 

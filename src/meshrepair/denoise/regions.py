@@ -10,10 +10,9 @@ creased edges:
            C_L = \\{ e \\in C : |\\text{chain}(e)| \\ge L \\},
 
 (chains = connected components of C through shared vertices). Real creases of CAD parts are
-long connected lines (after the robust stage the crease network of fandisk is one chain of ~720
-edges, twelve's 8 chains of 590, sharp_sphere's 34 chains of 1,480); what noise and terracing
-leave on organic meshes are short pieces (medians of 10-16 edges on nicolo, igea, pierrot and the
-Kinect scan; measured in docs/parameters.md). The supported region is ``C_L`` dilated by
+long connected lines (after the robust stage, chains of hundreds of edges); what noise and
+terracing leave on organic meshes are short pieces (median chain lengths of 10-16 edges on the
+benchmark grid, docs/parameters.md). The supported region is ``C_L`` dilated by
 ``rings`` vertex rings (a crease moves by a few edges between the noisy input and the result):
 an edge is in the region when both its vertices are. Outside it the schedule uses edge-Willmore
 only (the smooth prior), inside it the paper's robust + feature stages.
@@ -22,9 +21,9 @@ On a coarse mesh a whole crease network has fewer than ``L`` edges (a 12-triangl
 chain of 12), so the length asked of a chain is ``min(L, ⌈f·n_E⌉)`` with ``f = CHAIN_FRACTION``:
 only meshes under ``L / f = 1,500`` edges (about 500 vertices) ask less than ``L``.
 
-Length alone does not tell a short real crease (the Kinect pyramid's edge, one chain of 43;
-two of sharp_sphere's arcs, 30 and 33 edges) from the folds, wrinkles and spikes the probe
-finds on statues (chains of 32-55 edges on nicolo and pierrot). A chain shorter than
+Length alone does not tell a short real crease (30-45 edges on a small or coarse part) from
+the folds, wrinkles and spikes the probe finds on statues (chains of 32-55 edges). A chain
+shorter than
 ``L_long = LONG_CHAIN`` (60) edges is kept only when it looks like a crease between two flat
 sides at a coarser scale (:func:`chain_statistics`): its *persistence ratio* ``p`` (the angle
 between the mean normals of the faces within 4 steps on each side, over the angle between the
@@ -34,11 +33,9 @@ two faces of the edge, medians along the chain) is within 0.05 of 1 and its *sid
 .. math::  C_L' = \\{ e \\in C_L : |\\text{chain}(e)| \\ge L_{long} \\ \\text{or}\\
            (|p - 1| \\le 0.05 \\ \\text{and}\\ s \\le 5.5°) \\}.
 
-Measured (round 7 of docs/parameters.md): real short creases read p = 0.97-1.03, s = 2.8-5.2°
-(Kinect 0.97 / 5.2°, sharp_sphere 1.01 / 3.4-3.5°, fandisk γ0.7 1.03 / 2.8°); the organic
-chains (statues, spot, bunny, rocker_arm, screwdriver, camelhead) read p = 0.82-1.49 and
-s = 4.0-11.4°, and 56 of their 61 short chains fail one of the two tests (kept: 3 of bunny's
-7, 1 of nllr_nicolo's 4, 1 of nicolo γ0.4 random's 4; all 4 of pierrot's are dropped).
+On the benchmark grid (docs/parameters.md) real short creases read p = 0.97-1.03,
+s = 2.8-5.2°; the short chains on organic meshes read p = 0.82-1.49 and s = 4.0-11.4°, and
+more than 90 % of them fail one of the two tests.
 """
 
 from __future__ import annotations
@@ -226,7 +223,7 @@ def crease_support(topo: Topology, N: np.ndarray, *, th: float = 30.0,
         is within ``persist_tol`` of 1 and their side spread at most ``side_spread`` degrees
         (:func:`supported_chains`); ``persist_tol=None`` keeps every chain of ``L`` edges
     chain_filter : optional ``f(topo, N, creased, chains) -> chains`` applied to the kept chains
-        before the dilation (round 11d: :func:`meshrepair.denoise.crease_network.drop_noise_chains`)
+        before the dilation (:func:`meshrepair.denoise.crease_network.drop_noise_chains`)
 
     Returns
     -------

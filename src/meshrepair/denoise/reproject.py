@@ -3,9 +3,9 @@
 The V-update (26) fits the face normals of V to the ADMM normals N. Face normals do not change,
 to first order, when a vertex slides in its tangent plane, so the only force on the tangential
 position of a vertex is the fidelity ``λ/2 ||V_i - V⁰_i||²`` with a small λ where the noise is
-strong: the result *surface* S is right but its vertices drift along it (measured on nllr_igea:
-0.155 mean edge lengths of tangential error against 0.016 in the input and 0.051 for NLLR; the
-normal error is the same, docs/parameters.md).
+strong: the result *surface* S is right but its vertices drift along it (on impulsive noise
+along the normals about ten times the input's own tangential error, and three times a
+vertex-update method's such as NLLR, at the same normal error; docs/parameters.md).
 
 Post-step. With the result surface S = S(V) held fixed (its shape is what the prior and the
 normal fidelity decided), the fidelity restricted to S is minimised vertex by vertex:
@@ -23,10 +23,10 @@ piecewise-linear surface at new points.
 Weights (a minimum-variance blend). The projection is not exact either: the data vertex sits
 ``d_i = ⟨V⁰_i - V_i, n_i⟩`` off S along the normal, and an angular error of S's normals tilts
 its foot by about ``κ |d_i|``, jitter from vertex to vertex, to which the face normals (MSAE)
-are very sensitive (0.05 mean edge lengths of random tangential jitter on the oracle positions:
-nicolo 68 → 84). The solve's own position has error variance ``σ²`` (its drift, estimated by
-the mean squared shift ``||π_S(V⁰_i) - V_i||²`` over the vertices treated), the projection
-``κ² d_i²``; the blend of two independent estimates with the least variance is
+are very sensitive (0.05 mean edge lengths of random tangential jitter on exact positions raises
+MSAE by about a quarter). The solve's own position has error variance ``σ²`` (its drift,
+estimated by the mean squared shift ``||π_S(V⁰_i) - V_i||²`` over the vertices treated), the
+projection ``κ² d_i²``; the blend of two independent estimates with the least variance is
 
 .. math:: V_i^{new} = V_i + w_i (\\pi_S(V^0_i) - V_i), \\qquad
           w_i = \\frac{σ^2}{σ^2 + κ^2 d_i^2},
@@ -43,7 +43,7 @@ pulling towards when the noise lay along the normals. After the solve this shows
 0.13-0.56 on every normal-direction and impulsive input of the shared set, 0.78-1.45 on
 random-direction noise (measured in docs/parameters.md); the step runs when ρ_t < 0.6.
 
-Tangential regularisation (round 6, :func:`tangential_smooth`). The blended targets
+Tangential regularisation (:func:`tangential_smooth`). The blended targets
 ``T_i = V_i + w_i (π_S(V⁰_i) - V_i)`` still carry vertex-scale tangential jitter (the κ d_i tilt
 of each foot, independent from vertex to vertex), while for noise along the normals the data's
 tangential layout is right: the tangential part of the displacement ``Y - V⁰`` from the data is
@@ -61,8 +61,7 @@ weighted umbrella flow of the displacement field,
 ``μ/(1+μ)``) and put back on S by ``π_S``. On a plane it is the exact linear solve (tested); it
 commutes with rotations, translations and uniform scaling. Turn-over guard in two levels: the
 vertices of a face the smoothed step would reverse take the unsmoothed target ``T_i``, and if
-that still reverses a face, the solve's position. ``μ = REANCHOR_MU`` (docs/parameters.md,
-round 6).
+that still reverses a face, the solve's position. ``μ = REANCHOR_MU`` (docs/parameters.md).
 
 The search is local: a data vertex is near its result vertex (drift of a fraction of an edge),
 so the candidates are the faces of the ``rings``-ring of the result vertex i and of the result
@@ -124,7 +123,7 @@ REANCHOR_KAPPA = 0.3
 """``κ`` of the blend weights (module docstring)."""
 
 REANCHOR_MU = 0.5
-"""``μ`` of the tangential regularisation of the targets (module docstring, round 6)."""
+"""``μ`` of the tangential regularisation of the targets (module docstring)."""
 
 REANCHOR_SWEEPS = 3
 """Jacobi sweeps of :func:`tangential_smooth` (residual factor ``(μ/(1+μ))³ ≈ 0.04``)."""
@@ -204,7 +203,7 @@ def reanchor(V: np.ndarray, V0: np.ndarray, F: np.ndarray, active: np.ndarray | 
     active : (nV,) bool, the vertices to move (default all); boundary vertices of open meshes
         never move (their closest point can leave the border)
     kappa : ``κ`` of :func:`blend_weights` (0: the exact projection, ``w = 1``)
-    mu : ``μ`` of :func:`tangential_smooth` (0: the targets unsmoothed, round 5)
+    mu : ``μ`` of :func:`tangential_smooth` (0: the targets unsmoothed)
     topo : Topology, optional (built when omitted)
 
     Returns
@@ -217,11 +216,10 @@ def reanchor(V: np.ndarray, V0: np.ndarray, F: np.ndarray, active: np.ndarray | 
     The step slides vertices along S and must not turn a triangle over: the vertices of every
     face whose normal the step would reverse (``⟨n_f(V_new), n_f(V)⟩ < 0``) keep the solve's
     position, repeated until no face is reversed (the set of moving vertices shrinks each time,
-    so this ends). Without it spot γ0.4 normal had 6 faces turned over (errors 35-41° →
-    107-177°). A test on *local* folds instead
-    (:func:`meshrepair.model.relax.locally_flipped_faces`)
-    is wrong here: the igea truth has 74 locally folded faces, and the step restores 37 of them
-    (their error 106° → 67°).
+    so this ends); a face turned over carries a normal error above 90°. A test on *local*
+    folds instead (:func:`meshrepair.model.relax.locally_flipped_faces`) is wrong here: a
+    scanned truth can have locally folded faces of its own, and the step restores some of
+    them.
     """
     V = np.asarray(V, dtype=np.float64)
     V0 = np.asarray(V0, dtype=np.float64)

@@ -1,6 +1,7 @@
 """The rules that read the input: every default of :func:`meshrepair.denoise` that is
 computed from the mesh (noise level, its scale and direction, impulsiveness, the crease-supported
-fraction), each written as maths with the measurements behind it (docs/parameters.md).
+fraction), each written as maths with its threshold; the thresholds were chosen on the
+benchmark grid (docs/parameters.md).
 
 Pure functions of the statistics :mod:`meshrepair.model.noise`, :mod:`meshrepair.denoise.scale` and
 :mod:`meshrepair.denoise.regions` compute; :mod:`meshrepair.denoise` applies them (and re-exports
@@ -31,12 +32,13 @@ def robust_a_from_noise(gamma: float) -> float:
 def robust_iters_from_noise(gamma: float, folded_fraction: float = 0.0) -> int:
     """Default length of the robust stage: ``clip(130 γ̂, 10, 40)``, or 40 when more than 1 % of
     the faces were folded over. ``denoise`` passes the larger of the MAD and RMS noise
-    estimates, so impulsive noise (RMS 1.5× MAD) also gets the long stage.
+    estimates, so impulsive noise (RMS above MAD) also gets the long stage.
 
-    Measured (benchmarks in docs/parameters.md): at γ = 0.1 a 10-iteration robust stage halves
-    MSAE against 40 on organic meshes (spot 59 → 41, rocker_arm 72 → 41) and on fandisk (8.4 →
-    5.0); at γ = 0.3 the long stage is needed (fandisk 25 with 40, 49 with 10). Random-direction
-    noise reads about half its level but still wants the long stage; its fold-overs give it away.
+    The robust stage removes noise but also rounds features the longer it runs: low noise
+    wants a short stage (10 iterations at γ̂ = 0.1), noise near 0.3 mean edge lengths a long
+    one (40); the slope 130 joins the two (docs/parameters.md). Random-direction noise reads
+    about half its level along the normals but needs the long stage; the fold-overs it causes
+    identify it.
     """
     if gamma > HEAVY_NOISE:
         return int(np.clip(round(40 + HEAVY_SLOPE * (gamma - HEAVY_NOISE)), 40, 120))
@@ -63,8 +65,8 @@ FLAT_A = 0.5
 
 IMPULSIVE_RATIO = 1.3
 """Noise whose RMS level exceeds its robust (MAD) level by this factor is called impulsive: a
-minority of vertices moved far. Measured: Gaussian and Kinect inputs 1.00-1.10, the impulsive
-inputs 1.48 (twelve, pierrot) and 2.3 (nicolo i2)."""
+minority of vertices moved far. Gaussian and scanner noise read 1.00-1.10 on the benchmark
+grid, impulsive noise 1.5-2.3, so 1.3 lies between the two groups."""
 
 
 def is_impulsive(gamma: float, gamma_rms: float) -> bool:
@@ -85,19 +87,17 @@ def willmore_weight_from_scale(rho: float, impulsive: bool = False,
 
     .. math:: w = \\mathrm{clip}(1 + 150(ρ - 1.12),\\, 1,\\, 16),
 
-    1 for white noise (ρ ≤ 1.12; the Gaussian inputs read 0.83-1.09), 16 for scanner-like noise
-    correlated over ≥ 2 rings (ρ ≥ 1.22; the real Kinect scan reads 1.21-1.23).
+    1 for white noise (ρ ≤ 1.12; Gaussian noise reads 0.83-1.09 on the benchmark grid), 16 for
+    scanner-like noise correlated over ≥ 2 rings (ρ ≥ 1.22).
     The quadratic prior ``w ||DN||²`` against the coupling ``β2 ||N - 𝒩(V)||²`` smooths the
     normals over about ``√(w/β2)`` rings, so a larger ``w`` acts at the scale of the noise.
     Impulsive noise raises ρ through its isolated spikes (w = 1), and so do noise with a
     tangential part and low noise on an irregular mesh (the tangential residual and the
     curvature left in the reference): the weight is raised only when the noise lies along the
-    normals, ``tangential`` (:func:`meshrepair.denoise.scale.tangential_ratio`) < 0.65. Measured
-    false
-    positives without that test: rocker_arm γ0.1 normal (r_t 1.13, ρ 1.28), rocker_arm γ0.1
-    random (r_t 2.22, ρ 1.35), spot / nicolo γ0.1 random (r_t 1.35 / 1.85, ρ 1.23 / 1.22); the
-    real Kinect scan reads ρ 1.22 with r_t 0.34. Smooth synthetic correlated noise can read
-    r_t ≥ 0.65 (its high-passed normal part is small) and is then missed (docs/parameters.md).
+    normals, ``tangential`` (:func:`meshrepair.denoise.scale.tangential_ratio`) < 0.65: white
+    noise with a tangential part reads ρ 1.2-1.35 with ``r_t`` above 1, scanner noise ρ ≈ 1.22
+    with ``r_t`` ≈ 0.3. Smooth synthetic correlated noise can read ``r_t ≥ 0.65`` (its
+    high-passed normal part is small) and is then missed (docs/parameters.md).
     """
     if impulsive or tangential >= TANGENTIAL_MAX:
         return 1.0
@@ -120,17 +120,15 @@ def outside_weight(support_fraction: float, tangential: float) -> float:
     Outside C a CAD part is smooth patches (planes, cylinders, blends) far from its creases.
     The quadratic prior ``w ||t_e||²`` against the coupling ``β2 ||N - 𝒩(V)||²`` averages the
     normals over about ``√(w/β2)`` rings; with ``w = 1`` it leaves a ripple of a few degrees
-    there (tgv_fandisk: median face error 1.67° outside C against MeshTGV's 0.88°; inside C
-    ours is already lower). ``w_out = 6`` averages over ≈ 1.5 rings more and measured 0.96°.
-    It is quadratic, so it does not terrace the curved patches the flat-TV class would.
+    on the smooth patches, and ``w_out = 6`` averages over ≈ 1.5 rings more. It is quadratic,
+    so it does not terrace the curved patches the flat-TV class would.
 
-    The supported fraction separates the cases: CAD parts 0.41-0.64 (fandisk, twelve,
-    sharp_sphere, trim_star, screwdriver), the organic meshes 0.04-0.10 (nicolo, igea,
-    pierrot, bunny, rocker_arm: short left-over chains), so organic results do not change.
-    Heavy noise on coarse organic meshes can read high (spot γ0.4 0.63, camelhead 0.96); there
-    C covers nearly everything and the factor acts on little. Noise not along the normals
-    (``r_t ≥ 0.65``, :data:`TANGENTIAL_MAX`) keeps 1: fandisk γ0.4 random lost 9 % with it.
-    Measured in docs/parameters.md (round 4).
+    The supported fraction separates the cases: CAD parts read 0.41-0.64 on the benchmark grid,
+    organic meshes 0.04-0.10 (short left-over chains), so organic results do not change.
+    Heavy noise on coarse organic meshes can read high; there C covers nearly everything and
+    the factor acts on little. Noise not along the normals (``r_t ≥ 0.65``,
+    :data:`TANGENTIAL_MAX`) keeps 1: there the support is not a set of creases.
+    Thresholds chosen on the benchmark grid (docs/parameters.md).
     """
     if support_fraction >= CAD_SUPPORT and tangential < TANGENTIAL_MAX:
         return CAD_WILLMORE
@@ -157,12 +155,10 @@ def polish_rule(gamma: float, outside: float, willmore: float, length: float
     noise). A bump ``ℓ`` edges wide is averaged by a neighbourhood ``ℓ`` times wider; its
     residual slopes are larger (hence τ), and the filter-and-move passes diffuse, like the
     V-steps of :func:`inner_iters_from_scale`, over about ``ℓ²`` times as many passes.
-    At moderate white noise the feature stage already leaves the flat patches within 2°
-    (tgv_fandisk) and the same filter on gcn_trim_star_n3 (γ̂ 0.27) without the gate measured
-    75 → 129; organic meshes and random-direction noise have no converged crease mask to
-    bound it. Measured in docs/parameters.md (round 5): gcn_fandisk_n6 MSAE 58.7 → 51.5,
-    fandisk γ0.7 124.3 → 113.4; the Kinect scan 167.6 → 155.0 (ℓ = √2: r = 6, τ = 7.1°, 20
-    passes).
+    At moderate white noise the feature stage already leaves the flat patches within 2°, and
+    the filter there moves crease vertices that are right; organic meshes and random-direction
+    noise have no converged crease mask to bound it. Thresholds chosen on the benchmark grid
+    (docs/parameters.md).
     """
     heavy = gamma > HEAVY_NOISE and outside > 1.0
     if not POLISH or not (heavy or willmore > 1.0):
@@ -180,14 +176,12 @@ def inner_iters_from_scale(length: float, base: int = 3) -> int:
 
     The V-update (26) is solved by a few preconditioned gradient steps, each moving a vertex
     from its 1-ring: a bump of the vertices ``ℓ`` rings wide needs about ``ℓ²`` times as many
-    local steps to follow the smoothed normals as a one-ring bump (diffusion). On the real
-    Kinect scan (``ℓ ≈ 1.4-1.7``) the ADMM normals and the mesh's own normals keep the same
-    error (184 / 184 deg²), so the vertices, not the prior, hold the low-frequency bumps in;
-    3 / 6 / 10 / 20 steps (probe and solve): MSAE 184 / 167 / 169 / 170. The probe is run
-    again with the new count (the correlation is known only after a first probe): its better
-    converged normals keep a few crease chains (support 0 → 2.6 % of the edges); with 6 steps
-    in the final solve only, 176. On i.i.d. heavy noise more steps hurt (gcn_fandisk_n6 64 →
-    78 with 6), hence only for correlated noise (``w > 1``).
+    local steps to follow the smoothed normals as a one-ring bump (diffusion). With correlated
+    noise the vertices, not the prior, hold the low-frequency bumps in (the ADMM normals are
+    smooth, the mesh's own normals are not), so the V-steps are the bottleneck. The probe is
+    run again with the new count (the correlation is known only after a first probe): its
+    better converged normals keep the crease chains. On i.i.d. noise more steps follow the
+    noise as well, hence only for correlated noise (``w > 1``).
     """
     return int(np.clip(round(base * max(1.0, float(length) ** 2)), base, 12))
 
@@ -204,15 +198,11 @@ def warm_start_from_probe(impulsive: bool, outside: float, gamma: float) -> bool
     impulsive noise (:func:`is_impulsive`) on a CAD part (the rule of :func:`outside_weight`)
     at a real noise level. The probe is an MC smoother on every edge: it removes the thrown
     vertices and keeps the creases, so the main run's robust stage starts without the spikes
-    that otherwise pull the first feature iterations; the fidelity data are unchanged. Measured
-    (docs/parameters.md, round 8): twelve impulsive 0.5 MSAE 30.0 → 11.5 (design); held out,
-    synthetic impulsive noise (10 % of the vertices thrown 1.0 l, or 20 % thrown 0.6 l, along
-    the normals, over 0.1 l Gaussian noise): fandisk 103.2 → 77.4 and 27.6 → 19.4, sharp_sphere
-    279.2 → 227.1, trim_star 222.5 → 182.3 and 144.3 → 131.6, spot 257.5 → 240.2 and 150.7 →
-    139.7, the other rows unchanged. Not on organic meshes (nllr_nicolo 79.6 → 83.0, nllr_pierrot
-    73.2 → 85.3 with the warm start: their probe flattens the fine relief) and not at low noise:
-    fandisk γ0.1 normal reads impulsive (γ̂ 0.111, RMS 1.4× MAD) and lost 4.1 → 4.5 (twelve reads
-    γ̂ 0.206).
+    that otherwise pull the first feature iterations; the fidelity data are unchanged. Not on
+    organic meshes (the probe's MC prior flattens their fine relief) and not at low noise
+    (γ̂ ≤ 0.15, where Gaussian noise can read impulsive and the probe costs detail). Checked on
+    synthetic impulsive noise (a fraction of the vertices thrown along the normals over 0.1 l̄
+    Gaussian noise) held out from the choice (docs/parameters.md).
     """
     return bool(WARM_IMPULSIVE and impulsive and outside > 1.0 and gamma > WARM_IMPULSIVE_GAMMA)
 
@@ -233,9 +223,8 @@ def guidance_rule(gamma: float, outside: float, willmore: float) -> int:
     white noise (the Willmore weight of :func:`willmore_weight_from_scale` is 1) that is not
     heavy (:data:`HEAVY_NOISE`; heavy noise on organic meshes is left to the solve). The
     residual one-ring ripple of the normals grows with the noise, hence one pass per 0.09 mean
-    edge lengths of γ̂ (the MAD estimate): 1 pass at γ̂ ≈ 0.09 (the impulsive nllr_nicolo and
-    pierrot), 2 at 0.18-0.2 (nicolo γ0.2, spot γ0.4 random), 3 at 0.27 (nllr_igea).
-    Measured in docs/parameters.md (round 9).
+    edge lengths of γ̂ (the MAD estimate): 1 pass at γ̂ ≈ 0.09, 2 at 0.18-0.2, 3 from 0.27.
+    The unit was chosen on the benchmark grid (docs/parameters.md).
     """
     if not ORGANIC or outside != 1.0 or willmore != 1.0 or not gamma <= HEAVY_NOISE:
         return 0
@@ -264,21 +253,19 @@ def reintegrate_rule(passes: int, reanchored: bool, impulsive: bool, ratio_after
     :mod:`meshrepair.denoise.reproject` ran: the input's tangential layout is right), whose input is
     the result plus white noise of the estimated level: ``q`` = the robust level of the input's
     normal offsets from the result (:func:`meshrepair.denoise.organic.residual_level`) over γ̂ reads
-    0.77-0.93 where the solve removed white noise (nllr_igea, nicolo, pierrot, nicolo γ0.2, spot
-    γ0.4 random) and 0.26-0.66 on correlated noise, which the one-ring γ̂ and the result both
-    miss (restarting from that input puts the bumps back: spot correlated m=4 611 → 796 without
-    this test), and either
+    0.77-0.93 where the solve removed white noise and 0.26-0.66 on correlated noise, which the
+    one-ring γ̂ and the result both miss (restarting from that input would put the bumps
+    back), and either
 
     * the noise is impulsive (:func:`is_impulsive`): most input vertices are nearly exact, so a
       few steps from the (capped) input keep them and fix the thrown ones; or
     * the tangential drift left *after* the re-anchoring is large,
       ``ρ_t^{after} = rms‖P(V⁰ − V)‖ / rms⟨V⁰ − V, n⟩`` above 0.16 (the re-anchoring's guards
-      kept it): nllr_igea reads 0.18, the Gaussian inputs where the step loses 0.11-0.14.
+      kept it): Gaussian noise where the step does not pay reads 0.11-0.14.
 
     ``k`` grows with the noise: the steps are the only regulariser of the fit (module docstring
-    of :mod:`meshrepair.denoise.organic`), and more noise needs more of them (γ̂ ≈ 0.09 → 2 on the
-    impulsive nllr_nicolo and pierrot, 0.27 → 5 on igea).
-    Measured in docs/parameters.md (round 9).
+    of :mod:`meshrepair.denoise.organic`), and more noise needs more of them (γ̂ ≈ 0.09 → 2,
+    0.27 → 5). Thresholds chosen on the benchmark grid (docs/parameters.md).
     """
     if passes <= 0 or not reanchored or not level_ratio >= REINTEGRATE_LEVEL:
         return 0
@@ -287,12 +274,12 @@ def reintegrate_rule(passes: int, reanchored: bool, impulsive: bool, ratio_after
     return int(max(2, round(REINTEGRATE_STEPS_PER_GAMMA * gamma)))
 SHARPEN = True
 SHARPEN_FLAT_SUPPORT = True
-"""Round 11k: the sharpening's decision trusts a flat-supported set at ``ρ_S > 0.2``
-(:mod:`meshrepair.denoise.sharpen_decision`); False: round 9k's ``ρ_S > 1/2`` alone."""
+"""True: the sharpening's decision also trusts a flat-supported set at ``ρ_S > 0.2``
+(:mod:`meshrepair.denoise.sharpen_decision`); False: ``ρ_S > 1/2`` alone."""
 SHARPEN_RINGS = 10
 SHARPEN_MAX_RINGS = 14
-"""Cap of ``r``: the work grows as ``r²`` per face (igea, 134k vertices, ℓ = 1.73: 36 s at
-r = 17 for the step alone); 14 is the real Kinect scan's value."""
+"""Cap of ``r``: the work grows as ``r²`` per face (on 134k vertices the step alone takes
+about 36 s at r = 17); 14 covers the correlation lengths ℓ ≤ 1.4 of scanner noise."""
 
 
 def sharpen_rule(willmore: float, length: float) -> int | None:
@@ -307,11 +294,9 @@ def sharpen_rule(willmore: float, length: float) -> int | None:
     correlation length ``ℓ``. The solve smooths the normals of correlated noise over a few
     noise lengths (``w = 16``), so a crease comes out rounded over a band that grows with ℓ;
     the neighbourhood must reach the flat sides beyond the band on both sides (the polish's
-    ``4 ℓ`` rings reach into it). Measured on the real Kinect pyramid (ℓ = √2; design,
-    docs/parameters.md round 9k): r = 10 / 12 / 14 (2 passes, data test ε = 0.01): MSAE 152.7
-    → 147.7 / 145.8 / 144.9, E_a 6.93° → 6.30° / 6.19° / 6.11°. The data test, not the radius,
-    keeps smooth surfaces unchanged (synthetic Kinect-like noise, m = 3, γ 0.4: bunny and
-    fandisk unchanged to 0.1 %, where the step without the test costs +20 % / +2 %).
+    ``4 ℓ`` rings reach into it). The data test of :mod:`meshrepair.denoise.sharpen_decision`,
+    not the radius, keeps smooth surfaces unchanged: without it the step also moves smooth
+    surfaces under synthetic scanner-like noise (docs/parameters.md).
     """
     if not SHARPEN or not willmore > 1.0:
         return None

@@ -1,7 +1,7 @@
 """Multi-scale noise estimate: level and spatial correlation of the noise (scanner noise).
 
 The one-ring estimator of :mod:`meshrepair.model.noise` sees only the part of the noise that changes
-from a vertex to its neighbours. Scanner noise is spatially correlated (a Kinect depth map is
+from a vertex to its neighbours. Scanner noise is spatially correlated (a depth camera's map is
 smooth over several samples), so it reads far too low there. We look at the normal component of
 the residual of ``k`` steps of umbrella averaging ``W`` (``W = D⁻¹A``, diffusion radius ≈ √k
 rings)

@@ -1,5 +1,5 @@
-"""Decisions of :func:`meshrepair.denoise` that do not depend on the resolution
-(issue 12, round 11r): the probe's stopping rule and the CAD-part test.
+"""Decisions of :func:`meshrepair.denoise` that do not depend on the resolution: the probe's
+stopping rule and the CAD-part test.
 
 **1. The probe's stopping rule.**
 
@@ -15,46 +15,46 @@ lengths)
 and the test ``rel < τ`` is ``rms |ΔV| / l̄ < τ q``: in edge units the tolerance grows with the
 resolution (``q ∝ √n_V`` for a fixed shape). A mesh subdivided three times (``q`` × 8) stops its
 probe after a fraction of the iterations the same surface gets at its own resolution, and
-leaves the noise's terraces in, which the crease test reads as creases (spot subdivided three
-times at γ 0.5: 32 % of the edges creased against 7-8 % at 1× and 4×, docs/parameters.md
-round 11r). The tolerance in edge units is capped at its value on the finest mesh of the design
-set:
+leaves the noise's terraces in, which the crease test reads as creases (a smooth mesh
+subdivided three times at γ 0.5 reads about four times the creased edges of the same surface
+at its own resolution). The tolerance in edge units is capped at its value on the finest mesh
+of the benchmark set:
 
 .. math:: τ_{eff} = τ \\min(1, Q_0 / q), \\qquad Q_0 = 45,
 
-so ``rms |ΔV| / l̄ < τ \\min(q, Q_0)``: unchanged on every mesh with ``q ≤ 45`` (all the shared
-benchmark inputs read 14-44, bunny the largest), the same step length in edge units on every
-finer mesh, whatever its resolution.
+so ``rms |ΔV| / l̄ < τ \\min(q, Q_0)``: unchanged on every mesh with ``q ≤ 45`` (the shared
+benchmark inputs read 14-44), the same step length in edge units on every finer mesh,
+whatever its resolution.
 
-Round 11s gates it (:func:`gated_probe`): on a mesh with ``q > Q_0`` the probe first stops at
-``τ``; it goes on to ``τ_eff`` (for the iterations left) only when that probe's
-crease-supported region is not empty, so a fine organic mesh that reads no crease keeps the
-relative stop. Round 11u: phase 2 resumes phase 1's solver state (multipliers, penalties,
-normalisation, counters), so the two phases are the iterates of round 11r's single probe.
+A gate (:func:`gated_probe`): on a mesh with ``q > Q_0`` the probe first stops at ``τ``; it
+goes on to ``τ_eff`` (for the iterations left) only when that probe's crease-supported region
+is not empty, so a fine organic mesh that reads no crease keeps the relative stop. Phase 2
+resumes phase 1's solver state (multipliers, penalties, normalisation, counters), so the two
+phases are the iterates of a single probe run to ``τ_eff``.
 
-**2. The CAD-part test.** Round 4 calls a mesh a CAD part when the crease-supported region C
+**2. The CAD-part test.** :func:`meshrepair.denoise.rules.outside_weight` calls a mesh a CAD
+part when the crease-supported region C
 (chains dilated by 2 rings, :func:`meshrepair.denoise.regions.crease_support`) covers
 ``f = |C| / n_E ≥ 0.2`` of the edges. A crease network is a set of *lines* of the shape: its
 length in edges grows as ``q`` and the edges of the mesh as ``q²``, so ``f ∝ 1/q`` on the same
-part at another resolution (fandisk γ0.3: f = 0.43 / 0.23 / 0.12 at q = 19 / 38 / 76, so
-``f q`` = 8.2 / 8.6 / 8.8), and a finely resolved CAD part is read as organic. The chains of
+part at another resolution (``f q`` stays within 10 % when a CAD part is subdivided once and
+twice), and a finely resolved CAD part is read as organic. The chains of
 an organic mesh come from the noise or its relief, not from lines of the shape, so the same
 scaling cannot be applied to all of C. Only the chains that *look like* a crease between flat
 sides count: a chain ``c`` of C is crease-like when its persistence ratio and side spread
-(:func:`meshrepair.denoise.regions.chain_statistics`) pass the short-chain test of round 7,
-``|p_c − 1| ≤ 0.05`` and ``s_c ≤ 5.5°``, whatever its length. With ``f_g`` the share of C that
-belongs to crease-like chains (``f`` times their share of C's chain edges), the fraction the
-same network would cover at the resolution ``Q_c = 15`` of the coarsest design meshes (spot,
-twelve, trim_star: q 15-16, where the threshold 0.2 was read) is
+(:func:`meshrepair.denoise.regions.chain_statistics`) pass the short-chain test of
+:mod:`meshrepair.denoise.regions`, ``|p_c − 1| ≤ 0.05`` and ``s_c ≤ 5.5°``, whatever its length.
+With ``f_g`` the share of C that belongs to crease-like chains (``f`` times their share of C's
+chain edges), the fraction the same network would cover at the resolution ``Q_c = 15`` of the
+coarsest benchmark meshes (q 15-16, where the threshold 0.2 was chosen) is
 
 .. math:: f_{ref} = \\max\bigl(f,\\ f_g \\, q / Q_c\bigr),
 
-and ``f_ref`` replaces ``f`` in every rule that reads the CAD-part decision (the outside weight
-of round 4, the organic gates of rounds 9s, 10h and 10l, the data choice of round 9r).
-Measured on the probe (docs/parameters.md, round 11r): CAD parts at any resolution
-``f_g q / Q_c`` = 0.28-0.59 (twelve ×1, fandisk ×2 subdivided), the organic inputs of the
-guards 0.00-0.08 (their chains fail the test: side spread 4.6-8.4°), spot subdivided twice at
-γ0.5 0.006.
+and ``f_ref`` replaces ``f`` in every rule that reads the CAD-part decision (the outside
+weight, the organic gates of the guidance, the coarse-to-fine low-pass and the data weight, and
+the choice of the fidelity data). On the probe, CAD parts at any resolution read
+``f_g q / Q_c`` = 0.28-0.59 and organic meshes 0.00-0.08 (their chains fail the test: side
+spread 4.6-8.4°), so 0.2 separates them (docs/parameters.md).
 """
 
 from __future__ import annotations
@@ -144,27 +144,28 @@ def cad_support(topo, N: np.ndarray, support: np.ndarray, q: float, *,
     return max(f, crease_like_share(topo, N, support, th=th) * float(q) / Q_CAD)
 
 
-# Round 11s: the scale-free stop of rule 1 only where the probe already reads a crease
+# the scale-free stop of rule 1 only where the probe already reads a crease
 GATED_STOP = True
 GATE_SUPPORT = 0.0  # continue when f = |C| / n_E at the relative stop exceeds this
 
 
 def two_phase(q: float) -> bool:
     """Whether the probe of a mesh with radius ``q`` (edge lengths) runs in two phases
-    (round 11s): rule 1 on, the gate on and ``q > Q_0`` (below it both stops coincide)."""
+    (:func:`gated_probe`): rule 1 on, the gate on and ``q > Q_0`` (below it both stops
+    coincide)."""
     return bool(SCALE_FREE_STOP and GATED_STOP and q > Q_REF)
 
 
 def continue_probe(support: float) -> bool:
-    """The gate of round 11s: the probe stopped at the relative tolerance goes on to the
+    """The gate of :func:`gated_probe`: the probe stopped at the relative tolerance goes on to the
     scale-free one only when its crease-supported region C is not empty there,
     ``f = |C| / n_E > GATE_SUPPORT`` (a supported crease chain already read)."""
     return bool(support > GATE_SUPPORT)
 
 
 def gated_probe(solver_cls, options_cls, F, n_vertices, topo, stage, kw, Vd, Vi, q, th):
-    """Round 11s's two-phase probe of a mesh of radius ``q`` (edge lengths); round 11u: phase
-    2 *continues* phase 1's run.
+    """The two-phase probe of a mesh of radius ``q`` (edge lengths); phase 2 *continues*
+    phase 1's run.
 
     Phase 1 stops at the relative tolerance ``τ_1 = stage.switch_tol``; when
     :func:`continue_probe` reads a crease-supported region on its normals, the same solver
@@ -172,8 +173,8 @@ def gated_probe(solver_cls, options_cls, F, n_vertices, topo, stage, kw, Vd, Vi,
     normalisation, inner step, counters: :class:`meshrepair.model.solver.state.ADMMState`) with rule
     1's tolerance ``τ_2 = kw['tol']`` (``switch_tol · Q_0 / q``). Since the stop only reads
     ``rel`` and ``τ_2 < τ_1``, phase 1 + phase 2 are the iterates of one run to ``τ_2``
-    (:mod:`meshrepair.model.solver.state`): the two phases of a crease-supported mesh give round
-    11r's probe, the others keep the relative stop. Returns the last phase's result, its
+    (:mod:`meshrepair.model.solver.state`): the two phases of a crease-supported mesh give the
+    scale-free probe, the others keep the relative stop. Returns the last phase's result, its
     ``iterations`` the whole run's, with ``probe_phases`` (1 or 2) and ``probe_gate_support``
     (f at phase 1). When phase 2 does not run, the result also carries ``crease_support``, the
     ``crease_network.supported`` read of its normals, so the caller does not compute it again.

@@ -1,6 +1,6 @@
 """The decision of the crease sharpening (:mod:`meshrepair.denoise.modes`): where the sharpened
 candidate replaces the result, read from the data and from the result's flat support
-(issue 12, round 11k; docs/parameters.md).
+(docs/parameters.md).
 
 **Sets.** ``S`` runs over the connected sets (through mesh edges) of the vertices the
 candidate ``X`` moves by more than ``ε`` from the result ``V``; ``V⁰`` is the input.
@@ -10,7 +10,7 @@ candidate ``X`` moves by more than ``ε`` from the result ``V``; ``V⁰`` is the
 .. math:: ρ_S = \\frac{⟨X - V,\\, V^0 - V⟩_S}{\\|X - V\\|^2_S}
           = \\operatorname*{arg\\,min}_t \\sum_{i \\in S} \\|V^0_i - V_i - t (X_i - V_i)\\|^2,
 
-so ``ρ_S > 1/2 ⟺ Σ_S ‖V⁰ − X‖² < Σ_S ‖V⁰ − V‖²`` (round 9k's test). Under correlated
+so ``ρ_S > 1/2 ⟺ Σ_S ‖V⁰ − X‖² < Σ_S ‖V⁰ − V‖²`` (the plain data test). Under correlated
 noise the test is biased against ``X``. Write the input ``V⁰ = T + n`` (truth ``T``), the
 result ``V = T + b + P n`` (``b`` the rounding of the creases, ``P`` the low-pass share of the
 noise the result keeps: the polish fits it through its data term) and take ``X = T`` (the
@@ -22,24 +22,23 @@ for a symmetric ``P`` with eigenvalues in ``[0, 1]`` and noise of covariance ``�
 
 below 1/2 as soon as the noise the result keeps weighs as much as the rounding, negative when
 it weighs more; a false facet ``f`` cut into a smooth surface (``V`` the truth) gives
-``E ρ_S ≈ 0`` plus the share of ``f`` that the candidate's own data term fits. Measured with
-the truth (docs/parameters.md, round 11k): on CAD parts with Kinect-like noise the candidate
-is closer to the truth on every largest set while ``ρ_S`` reads −0.20 … 1.28 (the real Kinect
-pyramid 0.500: a knife edge at 1/2); on the smooth organic meshes it is farther and ``ρ_S``
-reads −0.18 … 0.095 (the real rabbit scan −0.33, igea −0.05), but 0.36-0.45 on a noisy
-sphere.
+``E ρ_S ≈ 0`` plus the share of ``f`` that the candidate's own data term fits. Against the
+truth (docs/parameters.md): on CAD parts with scanner-like noise the candidate is closer to
+the truth on every largest set while ``ρ_S`` reads −0.20 … 1.28 (a real scan of a
+piecewise-flat object reads 0.500, on the knife edge of 1/2); on smooth organic meshes it is
+farther and ``ρ_S`` reads −0.33 … 0.095, but 0.36-0.45 on a noisy sphere.
 
 **Flat support.** ``G`` is the polish's flatness gate on ``V``
 (:func:`meshrepair.denoise.polish.flat_gate`: faces whose neighbourhood of ``r_p`` rings across
 edges
 not in ``M_E`` has an rms normal spread below ``τ``) at half the polish's threshold,
 ``τ = τ_p / 2 = 2.5 max(1, ℓ)`` degrees, and ``φ_S`` the share of the vertices of ``S`` on a
-face of ``G``. A piecewise-flat part (a CAD part, a scanned box or pyramid) has most of its
-vertices on flat faces; a coarse smooth surface few at the noise's scale (measured: the
-Kinect 0.58, CAD parts 0.29-0.71; bunny, spot, the rabbit scan, a sphere 0.00-0.32; at
-``τ_p`` itself the rabbit scan read 0.66 and the Kinect 0.71, no separation). A finely
-sampled smooth surface is flat at that scale too (igea, 134k vertices: 0.51): ``φ`` is a
-prior, not a proof, and such a surface is refused by ``ρ`` (igea −0.05).
+face of ``G``. A piecewise-flat part (a CAD part, a scanned box) has most of its
+vertices on flat faces; a coarse smooth surface few at the noise's scale (piecewise-flat
+scans and CAD parts read 0.29-0.71, smooth organic meshes and a sphere 0.00-0.32; at ``τ_p``
+itself the two groups overlap at 0.66-0.71, hence half the threshold). A finely sampled smooth
+surface is flat at that scale too (0.51 at 134k vertices): ``φ`` is a prior, not a proof, and
+such a surface is refused by ``ρ`` (−0.05 there).
 
 **Decision.** ``X`` replaces ``V`` on ``S`` iff
 
@@ -48,8 +47,8 @@ prior, not a proof, and such a surface is refused by ``ρ`` (igea −0.05).
 
 where the result is mostly flat the piecewise-flat model is trusted as soon as the data move
 a fifth of the way from ``V`` towards ``X`` (the bias above), elsewhere the data must prefer
-``X`` outright (round 9k). The thresholds sit in the middle of the measured gaps: the Kinect
-reads ``ρ = 0.500, φ = 0.58`` (margins 0.30 and 0.13), the real rabbit scan ``ρ = −0.33,
+``X`` outright. The thresholds sit in the middle of the measured gaps: the piecewise-flat
+scan reads ``ρ = 0.500, φ = 0.58`` (margins 0.30 and 0.13), a smooth real scan ``ρ = −0.33,
 φ = 0.32`` (refused on both counts, margins 0.53 and 0.13), the smooth synthetic meshes
 ``ρ ≤ 0.095`` or ``φ ≤ 0.01`` (the sphere, ``ρ`` 0.36-0.45).
 """

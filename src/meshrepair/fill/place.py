@@ -52,10 +52,10 @@ SEAM_RETRY_FACTOR = 1.5
 SEAM_RETRY_MARGIN = 3.0
 """A planar patch whose mean dihedral angle across its loop exceeds
 ``SEAM_RETRY_FACTOR * surround + SEAM_RETRY_MARGIN`` degrees (surround: the original edges within
-3 rings) is enclosed again by Liepa's triangulation and the smoother seam kept. Measured on the
-peers benchmark (docs/holes.md): rocker_arm r=8 seams 25.3° / 19.6° vs surround 7.9° / 8.4°
-(Liepa: 8.6° / 5.8°, patch distance 0.62× / 0.59×), trim_star crease r=8 14.4° vs 5.3° (Liepa
-7.0°, 0.85×); unchanged below the rule: spot (1.7° vs 1.6°), twelve (5.6° vs 2.1°)."""
+3 rings) is enclosed again by Liepa's triangulation and the smoother seam kept. On the peers
+benchmark (docs/holes.md) the seams the rule catches read 2-3× their surround (14-25° against
+5-8°) and Liepa's enclosure brings them to 6-9°; seams below the rule are left as they
+are."""
 
 
 def _place_patches(V: np.ndarray, F: np.ndarray, holes, skip: dict[int, str], *, initial: str,

@@ -141,7 +141,7 @@ def route_creases(V: np.ndarray, loop: np.ndarray, ends: list[CreaseEnd]) -> Cre
         curves.append(np.stack([p0, m * ea.direction, p1, -m * eb.direction]))
         kinds.append("pair")
     rest = [e for i, e in enumerate(ends) if i not in used]
-    # T-junctions: a leftover crease whose line meets a paired crease ends on it (fandisk: a
+    # T-junctions: a leftover crease whose line meets a paired crease ends on it (e.g. a
     # concave crease meeting a straight convex one); the pair is split at the junction
     left = []
     for e in rest:

@@ -83,8 +83,8 @@ def tangential_anchor(V: np.ndarray, V0: np.ndarray, F: np.ndarray, weight: np.n
 
     Noise along the normals (scanners measure depth; the published Gaussian pairs) leaves the
     tangential positions of the vertices exact, but the normal-driven V-update (26) lets them
-    drift in the tangent plane (measured: 0.1-0.2 mean edge lengths of tangential error on
-    trim_star, fandisk and igea, where the input had ≤ 0.02), which costs E_V and, on CAD
+    drift in the tangent plane (0.1-0.2 mean edge lengths of tangential error where the input
+    had ≤ 0.02), which costs E_V and, on CAD
     parts, MSAE. The fidelity gets a tangential term ``λ_t/2 Σ_i ||P_i (V_i - V⁰_i)||²`` with
     ``P_i = I - n_i n_iᵀ`` (``n_i`` the current vertex normal, frozen for the step); its
     proximal map with step ``τ`` is

@@ -118,7 +118,7 @@ def direct_solve(A: sp.spmatrix, B: np.ndarray) -> np.ndarray:
     """Factorise the SPD ``A`` once and solve for all columns of ``B``.
 
     Uses cholespy's sparse Cholesky (CHOLMOD-based, wheels on PyPI: ``pip install cholespy``)
-    when installed, else scipy's SuperLU. On nicolo's 29k-face system: cholespy 0.34 s,
+    when installed, else scipy's SuperLU. On a 29k-face system: cholespy 0.34 s,
     SuperLU 8.7 s, warm-started PCG 3-5 iterations ≈ 0.01 s (docs/performance.md).
     """
     A = sp.csc_matrix(A)

@@ -3,8 +3,8 @@
 The paper's regulariser has two classes of edges: sharp (``M_E``, MC penalty with non-convexity
 ``a``, ℓ0-like) and the rest (edge-Willmore ``w ||t||²``). On a CAD part the non-sharp edges are
 mostly *flat* regions, where the quadratic Willmore term only damps the residual noise of the
-normals (it keeps a ripple of a few degrees: median face-normal error 1.9° on tgv_fandisk against
-1.2° for MeshTGV), while a total-variation-like penalty makes them exactly constant. Inside the
+normals (it keeps a ripple of a few degrees on planar patches, more than a TGV prior leaves),
+while a total-variation-like penalty makes them exactly constant. Inside the
 crease-supported region (:mod:`meshrepair.denoise.regions`) the non-sharp edges therefore keep an MC
 penalty with a small non-convexity ``a_f`` (ℓ1-like, the robust stage's prior) during the feature
 stage:

@@ -6,7 +6,7 @@ Meshes are drawn by a small **vectorised numpy z-buffer rasteriser** (orthograph
 per-pixel occlusion), and matplotlib (Agg backend, no display) is used only to lay out the
 finished raster with a title, a colour bar and, for :func:`compare_figure`, several panels.
 
-Measured on ``igea.ply`` (134,345 vertices, 268,686 faces) at 800 x 800 on the 2-core dev
+Measured on a 134,345-vertex mesh (268,686 faces) at 800 x 800 on the 2-core dev
 machine: the rasteriser itself takes 0.2-0.4 s, a full :func:`render_mesh` call with curvature
 colouring and colour bar 0.4-0.7 s (mean curvature 0.13 s, matplotlib layout ~0.15 s), with
 ``supersample=2`` 0.9-1.2 s.

@@ -84,7 +84,7 @@ class ADMMSolver:
         self.flat_edges = None if flat_edges is None else np.asarray(flat_edges, dtype=bool)
         self.anchor = (None if anchor is None or not np.any(anchor)
                        else np.asarray(anchor, dtype=np.float64))
-        # the faces and vertices the anchor reads (a pure speed-up: same values, round 11v)
+        # the faces and vertices the anchor reads (a pure speed-up: same values)
         self._anchor_support = (None if self.anchor is None
                                 else anchor_support(self.F, self.anchor))
         self.vsub = VSubproblem(self.F, nV, fixed=self.fixed)

@@ -1,4 +1,4 @@
-"""The resumable state of the ADMM loop (17)-(21): :class:`ADMMState` (round 11u).
+"""The resumable state of the ADMM loop (17)-(21): :class:`ADMMState`.
 
 A run of :meth:`meshrepair.model.solver.ADMMSolver.solve` is a deterministic map of its state
 
@@ -14,9 +14,9 @@ stopping rule (35) only *reads* ``rel^{k+1} = ||V^{k+1} − V^k|| / ||V^k||`` an
 ``s^{k_1}`` with ``τ_2`` produces exactly the iterates of one run with ``τ_2``: the one-phase
 run cannot stop before ``k_1`` (every ``rel^k`` there is ``≥ τ_1 > τ_2``, apart from the
 ``min_iter`` iterations that neither run may stop in) and from ``k_1`` on both apply the same
-``T`` to the same ``s``. :meth:`ADMMSolver.resume` continues from such a state; the restart of
-round 11s (a new solve from the returned vertices) reset ``ρ_1, ρ_2, η``, the normalisation
-and ``j``, and so was not the same run (tests/test_admm_resume.py).
+``T`` to the same ``s``. :meth:`ADMMSolver.resume` continues from such a state; a restart (a
+new solve from the returned vertices) would reset ``ρ_1, ρ_2, η``, the normalisation and ``j``,
+and so would not be the same run (tests/test_admm_resume.py).
 
 The state is written at the end of each iteration, before the callback, so a run stopped by
 rule (35) or by :class:`~meshrepair.model.solver.result.StopRequested` resumes exactly; after a
