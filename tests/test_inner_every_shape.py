@@ -7,9 +7,15 @@ import trimesh
 
 import meshrepair as mr
 from meshrepair.errors import MeshRepairError
-from meshrepair.geometry import face_normals
-from meshrepair.inner import BFGS_MAX_VERTICES, INNER_SOLVERS, InnerState, VSubproblem, run_inner
 from meshrepair.io import read_mesh
+from meshrepair.mesh.geometry import face_normals
+from meshrepair.model.inner import (
+    BFGS_MAX_VERTICES,
+    INNER_SOLVERS,
+    InnerState,
+    VSubproblem,
+    run_inner,
+)
 from tests.bundled import data_path
 
 

@@ -8,8 +8,8 @@ import logging
 import os
 import sys
 
-from . import __version__
-from .errors import MeshRepairError
+from meshrepair import __version__
+from meshrepair.errors import MeshRepairError
 
 # sub-command modules in src/meshrepair/commands/, each with register(subparsers)
 COMMANDS = ("denoise", "fill", "complete", "render", "report", "view", "batch")
@@ -35,14 +35,14 @@ def build_parser() -> argparse.ArgumentParser:
                 continue
             raise
         mod.register(sub)
-    from .commands.parsing import document_defaults
+    from meshrepair.commands.parsing import document_defaults
 
     document_defaults(p)
     return p
 
 
 def main(argv: list[str] | None = None) -> int:
-    from .commands.parsing import normalise_argv, parse_or_explain
+    from meshrepair.commands.parsing import normalise_argv, parse_or_explain
 
     parser = build_parser()
     args = parse_or_explain(parser, normalise_argv(parser, sys.argv[1:] if argv is None
@@ -59,7 +59,7 @@ def main(argv: list[str] | None = None) -> int:
     for h in handlers:
         h.addFilter(once)
     try:
-        from .commands import compiling
+        from meshrepair.commands import compiling
 
         quiet = bool(getattr(args, "quiet", False) or getattr(args, "quiet_all", False))
         compiling.CLOCK = compiling.CompileClock(announce=not quiet)

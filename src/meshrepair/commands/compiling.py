@@ -48,7 +48,7 @@ class CompileClock:
         try:
             from numba.core import event as nb_event
 
-            from .._kernels import HAVE_NUMBA
+            from meshrepair._kernels import HAVE_NUMBA
         except ImportError:
             return self
         if HAVE_NUMBA:

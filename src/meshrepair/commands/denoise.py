@@ -11,7 +11,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .common import (
+from meshrepair.commands.common import (
     ProgressBar,
     make_folder,
     output_folder,
@@ -33,8 +33,8 @@ def _write_history(path: Path | None, result, extra: dict, force: bool) -> None:
 def holes_note(V: np.ndarray, F: np.ndarray, out) -> str:
     """A one-line hint naming the holes ``denoise`` kept (boundary loops that are not the open
     border of a scan, :func:`meshrepair.holes.border.find_borders`), or ``""``."""
-    from ..holes.border import find_borders
-    from ..holes.detect import _find_holes
+    from meshrepair.holes.border import find_borders
+    from meshrepair.holes.detect import _find_holes
 
     holes = _find_holes(V, F)
     n = len(holes) - len(find_borders(V, F, holes))
@@ -46,10 +46,17 @@ def holes_note(V: np.ndarray, F: np.ndarray, out) -> str:
 
 
 def run_denoise(args: argparse.Namespace) -> int:
-    from ..denoise import denoise
-    from ..io import read_mesh, write_mesh
-    from ..solver import StopRequested
+    from meshrepair.denoise.api import denoise
+    from meshrepair.io import read_mesh, write_like_input
+    from meshrepair.model.solver import StopRequested
 
+    if args.explain:
+        return _explain(args)
+    if args.output is None:
+        from meshrepair.errors import MeshRepairError
+
+        raise MeshRepairError("denoise needs an OUTPUT mesh (or --explain to print the plan "
+                              "and write nothing)")
     out, log_path, report_path = run_outputs(args, [args.input], output=args.output)
     m = read_mesh(args.input)
     total = (args.robust_iters if args.robust_iters is not None else 40) + args.feature_iters
@@ -77,9 +84,9 @@ def run_denoise(args: argparse.Namespace) -> int:
         sharp_v = np.zeros(len(r.V), np.uint8)
         sharp_v[r.edges[r.M_E].ravel()] = 1
         attrs["sharp"] = sharp_v
-    write_mesh(out, r.V, r.F, vertex_attributes=attrs or None, overwrite=args.force)
+    write_like_input(out, m, r, extra=attrs, force=args.force)
     _write_history(log_path, r, {"seconds": dt}, args.force)
-    from . import compiling
+    from meshrepair.commands import compiling
 
     print(f"denoised {len(r.V)} vertices in {r.iterations} iterations ({dt:.2f} s"
           f"{compiling.CLOCK.included()}, "
@@ -92,7 +99,7 @@ def run_denoise(args: argparse.Namespace) -> int:
     if note:
         print(note)
     if report_path is not None:
-        from ..report import write_report
+        from meshrepair.report.page import write_report
 
         write_report(report_path, title=f"meshrepair denoise {Path(args.input).name}",
                      input_mesh=(m.V, m.F), output_mesh=(r.V, r.F),
@@ -104,20 +111,39 @@ def run_denoise(args: argparse.Namespace) -> int:
     return 0
 
 
+def _explain(args: argparse.Namespace) -> int:
+    """``denoise IN --explain``: the plan of the call, printed; nothing is written."""
+    from meshrepair.denoise.api import plan_denoise
+    from meshrepair.errors import MeshRepairError
+    from meshrepair.io import read_mesh
+
+    given = [n for n in ("output", "log", "report") if getattr(args, n, None)]
+    if given:
+        raise MeshRepairError(f"--explain writes nothing: drop {', '.join(given)}")
+    m = read_mesh(args.input)
+    t0 = time.perf_counter()
+    plan = plan_denoise(m.V, m.F, **denoise_options(args, output=False))
+    print(plan.explain())
+    print(f"(read and planned in {time.perf_counter() - t0:.2f} s; nothing written)")
+    return 0
+
+
 def run_noise(args: argparse.Namespace) -> int:
-    from ..io import read_mesh, write_mesh
-    from ..noise import add_noise
+    from types import SimpleNamespace
+
+    from meshrepair.io import read_mesh, write_like_input
+    from meshrepair.model.noise import add_noise
 
     out = output_path(args.output, [args.input], force=args.force)
     m = read_mesh(args.input)
     Vn = add_noise(m.V, m.F, args.gamma, direction=args.direction, seed=args.seed)
-    write_mesh(out, Vn, m.F, overwrite=args.force)
+    write_like_input(out, m, SimpleNamespace(V=Vn, F=m.F), force=args.force)
     print(f"added noise gamma={args.gamma} ({args.direction}, seed {args.seed}); wrote {out}")
     return 0
 
 
 def _metrics(V, F, Vr, Fr) -> dict:
-    from ..metrics import distances, msae, vertex_error
+    from meshrepair.metrics import distances, msae, vertex_error
 
     d = distances(V, F, Vr, Fr)
     out = {}
@@ -132,7 +158,7 @@ def _metrics(V, F, Vr, Fr) -> dict:
 
 
 def run_metrics(args: argparse.Namespace) -> int:
-    from ..io import read_mesh
+    from meshrepair.io import read_mesh
 
     a, b = read_mesh(args.result), read_mesh(args.reference)
     vals = _metrics(a.V, a.F, b.V, b.F)
@@ -149,9 +175,9 @@ def run_metrics(args: argparse.Namespace) -> int:
 def run_demo(args: argparse.Namespace) -> int:
     from importlib.resources import files
 
-    from ..denoise import denoise
-    from ..io import read_mesh, write_mesh
-    from ..metrics import msae, vertex_error
+    from meshrepair.denoise.api import denoise
+    from meshrepair.io import read_mesh, write_mesh
+    from meshrepair.metrics import msae, vertex_error
 
     data = files("meshrepair") / "data"
     names = ["fandisk_denoised.ply"] + ([] if args.no_render else ["fandisk_demo.png"])
@@ -174,7 +200,7 @@ def run_demo(args: argparse.Namespace) -> int:
     print(f"  {'':10s} {'MSAE (deg^2)':>14s} {'E_V':>12s}")
     print(f"  {'noisy':10s} {m0:14.2f} {e0:12.3e}")
     print(f"  {'denoised':10s} {m1:14.2f} {e1:12.3e}")
-    from . import compiling
+    from meshrepair.commands import compiling
 
     print(f"  {r.iterations} iterations in {dt:.2f} s{compiling.CLOCK.included()}"
           f"{bar.passes_note()}; sharp edges kept: "
@@ -182,7 +208,7 @@ def run_demo(args: argparse.Namespace) -> int:
     print(f"  wrote {out}")
     if not args.no_render:
         try:
-            from ..render import compare_figure
+            from meshrepair.render import compare_figure
 
             compare_figure([(noisy.V, noisy.F), (r.V, r.F), (truth.V, truth.F)],
                            ["noisy", "meshrepair", "ground truth"],
@@ -234,8 +260,13 @@ def register(subparsers) -> None:
                     "need no tuning: the noise level is estimated and every parameter is relative "
                     "to the mean edge length. Vertex order and faces are kept.")
     p.add_argument("input", help="noisy mesh (.ply .obj .off .stl)")
-    p.add_argument("output", help="result mesh (.ply recommended); never the input file")
+    p.add_argument("output", nargs="?",
+                   help="result mesh (.ply recommended); never the input file (omitted with "
+                        "--explain)")
     add_denoise_options(p)
+    p.add_argument("--explain", action="store_true",
+                   help="print the plan (what the input reads as, every decision and the rule "
+                        "that made it, the stages) and write nothing")
     p.add_argument("--log", metavar="RUN.json",
                    help="write the iteration history and parameters as JSON")
     p.add_argument("--report", metavar="OUT.html", help="write a self-contained HTML report")

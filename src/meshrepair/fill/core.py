@@ -12,12 +12,19 @@ from collections.abc import Callable
 
 import numpy as np
 
-from ..holes import self_intersections
-from ..solver import ADMMSolver, SolverOptions, Stage
-from ..topology import edge_topology
-from .patches import _blocks, _crease_edges, _edge_ids, _finite_rows, _intersecting, _ring_faces
-from .place import _place_patches
-from .result import FillResult
+from meshrepair.fill.patches import (
+    _blocks,
+    _crease_edges,
+    _edge_ids,
+    _finite_rows,
+    _intersecting,
+    _ring_faces,
+)
+from meshrepair.fill.place import _place_patches
+from meshrepair.fill.result import FillResult
+from meshrepair.holes import self_intersections
+from meshrepair.mesh.topology import edge_topology
+from meshrepair.model.solver import ADMMSolver, SolverOptions, Stage
 
 log = logging.getLogger("meshrepair.fill")
 
@@ -30,7 +37,7 @@ def _fill_core(V: np.ndarray, F: np.ndarray, holes, skip: dict[int, str], *, den
                progress: Callable[[int, int], None] | None = None,
                creases: bool = True, curvature: bool = True,
                triharmonic: bool = True) -> FillResult:
-    from ..geometry import face_normals, sharp_edge_mask
+    from meshrepair.mesh.geometry import face_normals, sharp_edge_mask
 
     t0 = time.perf_counter()
     nV, nF = len(V), len(F)
@@ -57,8 +64,8 @@ def _fill_core(V: np.ndarray, F: np.ndarray, holes, skip: dict[int, str], *, den
     M_E[crease_e] = True
     V_before = V1
     if denoise:
-        from ..denoise import default_stages, lambda_from_noise
-        from ..noise import estimate_noise
+        from meshrepair.model.noise import estimate_noise
+        from meshrepair.model.schedule import default_stages, lambda_from_noise
 
         gamma = estimate_noise(V, F)
         lam_used = lambda_from_noise(gamma) if lam is None else float(lam)

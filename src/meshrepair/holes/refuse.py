@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .intersect import self_intersections
+from meshrepair.holes.intersect import self_intersections
 
 
 def _coincident_loop_vertices(V: np.ndarray, loop: np.ndarray) -> tuple[int, int] | None:
@@ -72,7 +72,7 @@ def _patch_problem(V: np.ndarray, F: np.ndarray, Fp: np.ndarray, interior: np.nd
                    h: float, intersections: bool, border: bool = True) -> str:
     """Reason to refuse a patch (empty string if fine). ``border``: the loop is the longest of
     its component (only such a loop is said to be a border)."""
-    from ..metrics import point_to_surface
+    from meshrepair.metrics import point_to_surface
 
     # a few interior vertices near the surface say nothing (a crease corner of a small hole
     # lies close to the surround): the test is for big patches doubling a sheet
