@@ -54,9 +54,8 @@ def main(argv: list[str] | None = None) -> int:
         return 1
     from threadpoolctl import threadpool_limits
 
-    once = _OncePerCommand()
-    handlers = list(logging.getLogger().handlers)
-    for h in handlers:
+    onces = [(h, _OncePerCommand()) for h in logging.getLogger().handlers]  # one per handler:
+    for h, once in onces:  # each handler shows each warning once
         h.addFilter(once)
     try:
         from meshrepair.commands import compiling
@@ -83,7 +82,7 @@ def main(argv: list[str] | None = None) -> int:
         print("meshrepair: interrupted", file=sys.stderr)
         return 130
     finally:
-        for h in handlers:
+        for h, once in onces:
             h.removeFilter(once)
 
 
