@@ -110,6 +110,10 @@ def _bary(Q: np.ndarray, Tc: np.ndarray, t: np.ndarray, x: np.ndarray) -> np.nda
     return np.stack([1.0 - b1 - b2, b1, b2], axis=-1)
 
 
+STEINER_FACTOR = 8.0
+"""Triangle may add at most this many times the expected number of patch vertices (layout
+area over the target triangle area) as Steiner points; a layout needing more is given up."""
+
 LOCATE_MAX_PAIRS = 64
 """Average (cell, triangle) incidences per triangle above which :func:`_locate` coarsens its
 grid (bounds its memory at O(triangles + points))."""
@@ -241,7 +245,12 @@ def _refine_on_triangulation(k: int, S: np.ndarray, Ts: np.ndarray, Qs: np.ndarr
     amax = target
     if not isometric:
         amax *= float(areas(Qs, Ts).sum()) / max(float(areas(S, Ts).sum()), 1e-300)
-    opts = f"pYQq{MIN_ANGLE:g}"
+    # developed layout: Steiner points bounded at STEINER_FACTOR times the target count (folds
+    # meeting a loop vertex at tiny angles can make Triangle's quality refinement run away: a
+    # 105-loop gave 1.2 M triangles); reaching the bound gives the layout up (None), and the
+    # caller falls back to the mean-value layout
+    cap = int(STEINER_FACTOR * float(areas(Qs, Ts).sum()) / amax) + 4 * k + 100
+    opts = f"pYQq{MIN_ANGLE:g}" + (f"S{cap}" if isometric else "")
     out = triangle.triangulate({"vertices": Q, "segments": segs}, opts + _area_switch(amax))
     for _ in range(0 if isometric else 2):
         X2 = np.asarray(out["vertices"], dtype=np.float64)
@@ -254,7 +263,7 @@ def _refine_on_triangulation(k: int, S: np.ndarray, Ts: np.ndarray, Qs: np.ndarr
                                     "triangle_max_area": bound}, f"r{opts}a")
     X2 = np.asarray(out["vertices"], dtype=np.float64)
     T = np.asarray(out.get("triangles", np.empty((0, 3))), dtype=np.int64).reshape(-1, 3)
-    if len(T) == 0 or len(X2) < k or not np.allclose(X2[:k], Q):
+    if len(T) == 0 or len(X2) < k or not np.allclose(X2[:k], Q) or (isometric and len(X2) - k >= cap):
         return None
     return lift(X2), T, X2
 
