@@ -263,7 +263,8 @@ def _refine_on_triangulation(k: int, S: np.ndarray, Ts: np.ndarray, Qs: np.ndarr
                                     "triangle_max_area": bound}, f"r{opts}a")
     X2 = np.asarray(out["vertices"], dtype=np.float64)
     T = np.asarray(out.get("triangles", np.empty((0, 3))), dtype=np.int64).reshape(-1, 3)
-    if len(T) == 0 or len(X2) < k or not np.allclose(X2[:k], Q) or (isometric and len(X2) - k >= cap):
+    if len(T) == 0 or len(X2) < k or not np.allclose(X2[:k], Q) \
+            or (isometric and len(X2) - k >= cap):
         return None
     return lift(X2), T, X2
 
