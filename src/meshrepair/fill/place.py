@@ -55,10 +55,14 @@ peers benchmark (docs/holes.md): rocker_arm r=8 seams 25.3° / 19.6° vs surroun
 def _place_patches(V: np.ndarray, F: np.ndarray, holes, skip: dict[int, str], *, initial: str,
                    edge_length: float | None, th: float, check: bool,
                    progress: Callable[[int, int], None] | None, creases: bool, curvature: bool,
-                   triharmonic: bool
+                   triharmonic: bool, known_holes: set[int] | frozenset[int] = frozenset()
                    ) -> tuple[np.ndarray, np.ndarray, list[HoleReport], float, float]:
     """Enclose the selected holes and place their patches; returns ``(V1, F1, reports,
-    t_enclose, t_initial)`` with the refused patches already removed (their reports say why)."""
+    t_enclose, t_initial)`` with the refused patches already removed (their reports say why).
+
+    ``known_holes``: loops known to be holes (the rest of the surface encloses them, or the
+    caller selected them): never refused; a patch that still intersects the surface after every
+    enclosing method is kept, with a note in its report."""
     nV, nF = len(V), len(F)
     by_index = {h.index: h for h in holes}
     stage: dict[int, int] = {}  # hole index -> position in its list of enclosing methods
@@ -75,7 +79,7 @@ def _place_patches(V: np.ndarray, F: np.ndarray, holes, skip: dict[int, str], *,
             sharp_v = np.flatnonzero(_sharp_vertices(V, F, th, nV))
         V1, F1, reports = enclose_holes(
             V, F, holes, skip, edge_length=edge_length, check=check, intersections=False,
-            method=method, creases=routes,
+            method=method, creases=routes, known_holes=known_holes,
             progress=None if progress is None or not first else progress)
         first = False
         tb = time.perf_counter()
@@ -182,10 +186,20 @@ def _place_patches(V: np.ndarray, F: np.ndarray, holes, skip: dict[int, str], *,
                     continue
                 tried = ", ".join(_METHOD_NAMES[m] for m in _enclose_methods(by_index[i])
                                   ) if not rep.reason.startswith("annulus") else "annulus"
+                if i in known_holes:
+                    dropped[bf] = False
+                    note = (f"the patch intersects the surface ({n_x} face pairs; tried: "
+                            f"{tried}); kept because the loop is a hole of a closed surface or "
+                            "was selected: check it")
+                    if note not in rep.note:
+                        rep.add_note(note)
+                        log.warning("hole %d: %s", i, note)
+                    continue
                 drop[i] = (f"the patch would intersect the surface ({n_x} face pairs; tried: "
                            f"{tried}): the loop is too twisted for a direct fill (e.g. it wraps "
                            "round a thin wall or is the border of an open scan: use "
-                           "keep_border); exclude it or fill it manually")
+                           f"keep_border); keep the patch anyway by selecting it (holes=[{i}], "
+                           f"CLI --holes {i})")
         t_enclose += tb - ta
         t_initial += time.perf_counter() - tb
         if not retry and not revert:

@@ -102,4 +102,6 @@ class FillResult:
                     if h.status == "filled" else f"skipped: {h.reason}")
             lines.append(f"  hole {h.index}: {h.n_boundary} boundary edges, length "
                          f"{h.length:.6g}: {what}")
+            if h.note:
+                lines.append(f"    note: {h.note}")
         return "\n".join(lines)
