@@ -118,6 +118,9 @@ def _fill_core(V: np.ndarray, F: np.ndarray, holes, skip: dict[int, str], *, den
             if rep.n_intersections:
                 log.warning("hole %d: %d face pairs of the patch intersect the mesh", i,
                             rep.n_intersections)
+    from .quality import hole_quality
+
+    hole_quality(V1, F1, reports, nV, nF)
     return FillResult(
         V=V1, F=F1, M_V=M_V, M_E=M_E, edges=topo.edges.copy(),
         history=history, holes=reports, new_vertices=new_v, new_faces=new_f,
