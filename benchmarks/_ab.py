@@ -41,7 +41,7 @@ if __name__ == "__main__":
     import resource
     import time
 
-    import meshrepair.solver as solver
+    import meshrepair.model.solver as solver
     from meshrepair import denoise
 
     runs = []

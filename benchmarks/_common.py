@@ -202,9 +202,9 @@ def warm_imports(jit: bool = True) -> float:
     import scipy.sparse.linalg  # noqa: F401
 
     import meshrepair  # noqa: F401
-    import meshrepair.denoise  # noqa: F401
-    import meshrepair.relax  # noqa: F401
-    import meshrepair.validate  # noqa: F401
+    import meshrepair.denoise.api  # noqa: F401
+    import meshrepair.mesh.validate  # noqa: F401
+    import meshrepair.model.relax  # noqa: F401
 
     if jit:
         import trimesh

@@ -27,9 +27,9 @@ import _common
 import numpy as np
 from scipy.spatial import cKDTree
 
-from meshrepair.geometry import dihedral_angles, face_normals, mean_edge_length
+from meshrepair.mesh.geometry import dihedral_angles, face_normals, mean_edge_length
+from meshrepair.mesh.topology import edge_topology
 from meshrepair.metrics import distances
-from meshrepair.topology import edge_topology
 
 # ------------------------------------------------------------------------------------------------
 # peers

@@ -17,7 +17,7 @@ from pathlib import Path
 from threadpoolctl import threadpool_limits
 
 from meshrepair import add_noise, denoise, msae, read_mesh
-from meshrepair.solver import Stage
+from meshrepair.model.solver import Stage
 
 SHARED = Path(__file__).resolve().parents[2] / "shared" / "meshes"
 

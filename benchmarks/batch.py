@@ -1,5 +1,6 @@
 #!/usr/bin/env python
-"""Batch throughput (issue 16): meshes per minute of ``meshrepair.batch.run(task="denoise")``
+"""Batch throughput (issue 16): meshes per minute of
+``meshrepair.batch.orchestrate.run(task="denoise")``
 with 1 and 2 local Dask workers on the shared noisy meshes, the speed-up, and per-worker peak
 memory.
 
@@ -71,7 +72,7 @@ def lpt_makespan(times: list[float], n: int) -> float:
 
 
 def one_run(paths: list[Path], n: int, thumbnails: bool) -> dict:
-    from meshrepair import batch
+    import meshrepair.batch.orchestrate as batch
 
     t0 = time.perf_counter()
     with batch.connect(workers=n) as client:

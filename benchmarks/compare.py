@@ -51,13 +51,13 @@ from scipy.sparse.csgraph import dijkstra
 from scipy.spatial import cKDTree
 
 from meshrepair.baselines import bilateral_normal_filter, taubin_smooth
-from meshrepair.denoise import denoise
-from meshrepair.geometry import mean_edge_length
+from meshrepair.denoise.api import denoise
 from meshrepair.io import read_mesh
+from meshrepair.mesh.geometry import mean_edge_length
+from meshrepair.mesh.topology import boundary_loops
 from meshrepair.metrics import distances, msae, vertex_error
-from meshrepair.noise import add_noise
+from meshrepair.model.noise import add_noise
 from meshrepair.synthetic import edge_graph
-from meshrepair.topology import boundary_loops
 
 ROOT = Path(__file__).resolve().parents[1]
 DEFAULT_MESHES = Path(os.environ.get("MESHREPAIR_MESHES", ROOT.parent / "shared" / "meshes"))

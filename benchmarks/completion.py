@@ -24,12 +24,12 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from meshrepair.complete import complete, extract_patch  # noqa: E402
-from meshrepair.correspondence import apply_transform  # noqa: E402
+from meshrepair.complete.api import complete, extract_patch  # noqa: E402
+from meshrepair.complete.correspondence import apply_transform  # noqa: E402
+from meshrepair.complete.symmetry import detect_symmetry  # noqa: E402
 from meshrepair.errors import MeshRepairError  # noqa: E402
-from meshrepair.geometry import mean_edge_length  # noqa: E402
+from meshrepair.mesh.geometry import mean_edge_length  # noqa: E402
 from meshrepair.metrics import point_to_surface  # noqa: E402
-from meshrepair.symmetry import detect_symmetry  # noqa: E402
 from meshrepair.synthetic import (  # noqa: E402
     DAMAGES,
     damage_region,
@@ -105,7 +105,7 @@ def pictures(folder: Path) -> None:
         return keep
 
     def view(V, F, faces):
-        from meshrepair.geometry import face_normals_areas
+        from meshrepair.mesh.geometry import face_normals_areas
 
         N, A = face_normals_areas(V, F[faces])
         n = (N * A[:, None]).sum(0)

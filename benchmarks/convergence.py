@@ -11,9 +11,9 @@ Usage (from the project root)::
 (a) Inner solvers. ``twelve`` and ``fandisk`` get noise (32) with γ = 0.2 (``add_noise(seed=0)``)
 and the default ``denoise`` runs until the V-subproblem of ADMM iteration ``--k``. That
 subproblem is captured *exactly as the solver poses it* by spying on the ``run_inner`` call of
-``meshrepair.solver`` (data ``V0``, weights ``λ M_V²``, ``z = ρ2 − β2 N`` in normalised units,
+``meshrepair.model.solver`` (data ``V0``, weights ``λ M_V²``, ``z = ρ2 − β2 N`` in normalised units,
 the warm start ``V^(k−1)`` and the current Armijo step), then the run stops. Each inner solver of
-``meshrepair.inner.run_inner`` is run on a fresh copy of it for ``--inner-iters`` iterations:
+``meshrepair.model.inner.run_inner`` is run on a fresh copy of it for ``--inner-iters`` iterations:
 ``gd`` with a fixed step (α = the step plain Armijo settles at on this subproblem, and α/4),
 ``armijo`` (plain, and with the Jacobi preconditioning the ADMM uses by default when the
 package has it), ``heavy_ball``, ``lbfgs`` and ``bfgs`` (only for meshes of at most
@@ -64,7 +64,7 @@ def capture_subproblem(V, F, k: int) -> dict:
     """Run the default denoise until the V-subproblem of ADMM iteration ``k``; return it."""
     import dataclasses
 
-    import meshrepair.solver.admm as S
+    import meshrepair.model.solver.admm as S
     from meshrepair import denoise
 
     orig = S.run_inner
@@ -97,7 +97,7 @@ def capture_subproblem(V, F, k: int) -> dict:
 
 
 def make_problem(sub: dict):
-    from meshrepair.inner import VSubproblem
+    from meshrepair.model.inner import VSubproblem
 
     fixed = None if sub["free"] is None else ~sub["free"]
     p = VSubproblem(sub["F"], sub["nV"], fixed=fixed)
@@ -111,7 +111,7 @@ def inner_state(sub: dict, kind: str, step: float | None = None):
     ``"plain"`` = unpreconditioned gradient steps, ``"jacobi"`` = Jacobi-preconditioned Armijo."""
     import dataclasses
 
-    from meshrepair.inner import InnerState
+    from meshrepair.model.inner import InnerState
 
     fields = {f.name for f in dataclasses.fields(InnerState)}
     if kind == "solver":
@@ -126,7 +126,7 @@ def inner_state(sub: dict, kind: str, step: float | None = None):
 def record_run(sub: dict, solver: str, V_start, iters: int, state) -> dict:
     """Run inner solver ``solver`` (a ``run_inner`` name) on a fresh copy of the subproblem from
     ``V_start`` with ``state``, recording energy and gradient norm at every gradient evaluation."""
-    from meshrepair.inner import run_inner
+    from meshrepair.model.inner import run_inner
 
     p = make_problem(sub)
     orig = p.energy_grad
@@ -154,7 +154,7 @@ def record_run(sub: dict, solver: str, V_start, iters: int, state) -> dict:
 
 
 def time_run(sub: dict, solver: str, V_start, iters: int, make_state, repeats: int) -> float:
-    from meshrepair.inner import run_inner
+    from meshrepair.model.inner import run_inner
 
     best = np.inf
     for _ in range(repeats):
@@ -169,7 +169,7 @@ def time_run(sub: dict, solver: str, V_start, iters: int, make_state, repeats: i
 
 def reference_energy(sub: dict, V_start, iters: int) -> tuple[float, np.ndarray]:
     """A long L-BFGS run from the warm start (the best-effort minimum of the subproblem)."""
-    from meshrepair.inner import run_inner
+    from meshrepair.model.inner import run_inner
 
     p = make_problem(sub)
     V = run_inner("lbfgs", p, np.array(V_start, copy=True), iters, inner_state(sub, "plain"))
@@ -463,10 +463,10 @@ thread, {elapsed:.0f} s in all.
 Setup: `twelve` and `fandisk` with noise (32), γ = 0.2, normal direction
 (`add_noise(V, F, 0.2, seed=0)`). The default `denoise` runs until the V-subproblem (26) of ADMM
 iteration {k}; that subproblem is captured exactly as the solver poses it (spy on
-`meshrepair.solver.run_inner`: data, fidelity weights, `z = ρ2 − β2 N`, the warm start `V^(k)`
+`meshrepair.model.solver.run_inner`: data, fidelity weights, `z = ρ2 − β2 N`, the warm start `V^(k)`
 (the ADMM iterate entering iteration {k}) and the inner solver's state, all in normalised units:
 centred, divided by the mean edge length),
-and every inner solver of `meshrepair.inner.run_inner` runs {args.inner_iters} iterations on a
+and every inner solver of `meshrepair.model.inner.run_inner` runs {args.inner_iters} iterations on a
 fresh copy, from the warm start: plain Armijo GD, the Jacobi-preconditioned Armijo GD the ADMM
 uses by default (when the package has it: its state, step and preconditioning, are copied from
 the ADMM run), heavy ball with backtracking (27), scipy L-BFGS-B, and GD with a fixed step: α

@@ -219,7 +219,8 @@ class PhaseTimer:
     """Attribute the wall time of the ADMM loop to its steps, from outside.
 
     Every function the solver loop calls through its namespace (functions imported into
-    ``meshrepair.solver.admm``, functions of ``meshrepair`` modules it references, methods of the
+    ``meshrepair.model.solver.admm``, functions of ``meshrepair`` modules it references, methods of
+    the
     ``meshrepair`` classes it uses) is wrapped with a timer; nested calls count for the outermost
     wrapped call. The step in progress is switched at a few stable anchors of the scheme (17)-(21):
     the denoise callback (end of an iteration -> t-update), ``t_update`` or ``t_from_normals`` exit
@@ -299,7 +300,7 @@ class PhaseTimer:
     def install(self):
         import dataclasses
 
-        import meshrepair.solver.admm as solver
+        import meshrepair.model.solver.admm as solver
 
         def ours(o):
             return (getattr(o, "__module__", "") or "").startswith("meshrepair")

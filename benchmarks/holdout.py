@@ -1,7 +1,7 @@
 """Design set vs held-out set for the denoising defaults (issue 12; table in docs/parameters.md).
 
 Runs ``denoise(V, F)`` at its defaults on the shared noisy/truth pairs, on synthetic noise (32)
-(seed 7, the ablation's protocol) and on synthetic *correlated* noise (``meshrepair.scale
+(seed 7, the ablation's protocol) and on synthetic *correlated* noise (``meshrepair.denoise.scale
 .correlated_noise``, m diffusion steps, seed 7), and prints MSAE, E_a, E_V and time per case,
 with the set each case belongs to: the rules were chosen on the design set only.
 
@@ -71,7 +71,7 @@ def load(c):
     C.CACHE.mkdir(parents=True, exist_ok=True)
     f = C.CACHE / f"corr_{c[2]}_g{c[3]:g}_m{c[4]}_s7.npy"
     if not f.exists():
-        from meshrepair.scale import correlated_noise
+        from meshrepair.denoise.scale import correlated_noise
 
         np.save(f, correlated_noise(Vt, F, c[3], c[4], seed=7))
     return np.load(f), Vt, F

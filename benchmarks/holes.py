@@ -36,7 +36,8 @@ patch distance, normal deviation, crease angle restored vs truth, time, peak mem
 ``--crease-picture PNG`` draws docs/img/holes_crease.png.
 
 Usage: ``python benchmarks/holes.py [--enclose auto,liepa] [--cases cut,bunny,denoise,real,peers]``
-(about a minute). ``--enclose`` sets the order in which :data:`meshrepair.fill.ENCLOSE_ORDER`
+(about a minute). ``--enclose`` sets the order in which
+:data:`meshrepair.fill.options.ENCLOSE_ORDER`
 tries the enclosing methods (default: the library's), e.g. ``liepa,auto`` to try Liepa's
 triangulation first.
 """
@@ -54,10 +55,10 @@ import numpy as np  # noqa: E402
 from scipy.spatial import cKDTree  # noqa: E402
 
 from meshrepair.fill import fill_holes  # noqa: E402
-from meshrepair.geometry import dihedral_angles, face_normals, mean_edge_length  # noqa: E402
+from meshrepair.mesh.geometry import dihedral_angles, face_normals, mean_edge_length  # noqa: E402
+from meshrepair.mesh.topology import edge_topology  # noqa: E402
 from meshrepair.metrics import distances  # noqa: E402
 from meshrepair.synthetic import edge_graph_distances  # noqa: E402
-from meshrepair.topology import edge_topology  # noqa: E402
 
 VARIANTS = {
     "flat": {"initial": "harmonic", "refine": False},
@@ -165,7 +166,7 @@ def run_bunny(lines):
 def run_denoise(lines):
     import trimesh  # noqa: F401
 
-    from meshrepair.noise import add_noise
+    from meshrepair.model.noise import add_noise
 
     V, F, _ = _common.read("spot")
     diag = float(np.linalg.norm(V.max(axis=0) - V.min(axis=0)))
@@ -269,12 +270,12 @@ def crease_picture(path: str, name: str = "fandisk", kind: str = "crease",
 def main() -> None:
     import argparse
 
-    import meshrepair.fill
+    import meshrepair.fill.options
 
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--enclose", default=None,
                     help="comma-separated order of enclosing methods (auto, liepa); default: "
-                         f"{','.join(meshrepair.fill.ENCLOSE_ORDER)}")
+                         f"{','.join(meshrepair.fill.options.ENCLOSE_ORDER)}")
     ap.add_argument("--cases", default="cut,bunny,denoise",
                     help="comma-separated subset of: cut, bunny, denoise, peers (cut-and-refill "
                          "against CGAL, MeshLib, pymeshfix), real (the shared meshes with real "
@@ -298,7 +299,7 @@ def main() -> None:
         order = tuple(m.strip() for m in args.enclose.split(","))
         if not order or set(order) - {"auto", "liepa"}:
             ap.error("--enclose takes methods among: auto, liepa")
-        meshrepair.fill.ENCLOSE_ORDER = order
+        meshrepair.fill.options.ENCLOSE_ORDER = order
     cases = {c.strip() for c in args.cases.split(",")}
     if cases - {"cut", "bunny", "denoise", "peers", "real"}:
         ap.error("--cases takes: cut, bunny, denoise, peers, real")
@@ -309,7 +310,7 @@ def main() -> None:
     lines = [HEADER] if cases & {"cut", "bunny"} else []
     if lines:
         print(HEADER, flush=True)
-    print(f"enclosing order: {','.join(meshrepair.fill.ENCLOSE_ORDER)}", flush=True)
+    print(f"enclosing order: {','.join(meshrepair.fill.options.ENCLOSE_ORDER)}", flush=True)
     _common.warm_imports(jit=True)
     # compile (or load) the numba kernel of Liepa's triangulation outside the timings
     from meshrepair.holes import min_weight_triangulation

@@ -23,7 +23,7 @@ def main() -> None:
     from meshrepair.metrics import msae
     from meshrepair.synthetic import impulsive_noise
 
-    rules = importlib.import_module("meshrepair.denoise_rules")
+    rules = importlib.import_module("meshrepair.denoise.rules")
     info = _common.machine_info()
     print(f"machine: {info}, memory probe {_common.memory_probe():.1f} ms\n")
     print("| mesh | thrown | impulsive | w_out | from the input | from the probe (rule) | change |")

@@ -1,7 +1,8 @@
 """Synthetic Kinect-like (spatially correlated) noise on the shared meshes: the defaults with
-and without the crease sharpening of round 9k (``denoise_rules.SHARPEN``, :mod:`meshrepair.modes`).
+and without the crease sharpening of round 9k (``denoise_rules.SHARPEN``,
+:mod:`meshrepair.denoise.modes`).
 
-Noise: ``meshrepair.scale.correlated_noise`` with m = 3 diffusion steps (ℓ ≈ 1.7 edges) and
+Noise: ``meshrepair.denoise.scale.correlated_noise`` with m = 3 diffusion steps (ℓ ≈ 1.7 edges) and
 level γ = 0.4 (seed 7), the regime where the multi-scale estimate finds the noise correlated
 (w > 1) as on the real Kinect scan; holdout.py's correlated rows (m = 4 / 8) read w = 1 and do
 not exercise the rule. Prints one markdown row per mesh::
@@ -10,7 +11,8 @@ not exercise the rule. Prints one markdown row per mesh::
 
 ``--decision`` compares round 9k's decision (``ρ_S > 1/2`` alone,
 ``denoise_rules.SHARPEN_FLAT_SUPPORT = False``) with round 11k's (the flat support,
-:mod:`meshrepair.sharpen_decision`) instead of the step off / on, and prints the largest set's
+:mod:`meshrepair.denoise.sharpen_decision`) instead of the step off / on, and prints the largest
+set's
 ``ρ`` and ``φ``; ``--cases mesh:γ:m:seed ...`` replaces the default list (``kinect`` is the
 real Kinect pyramid of ``published/``)::
 
@@ -33,7 +35,7 @@ MESHES = ("fandisk", "bunny", "igea", "nicolo", "spot", "sharp_sphere", "twelve"
 
 def _inputs(case: str):
     from meshrepair import read_mesh
-    from meshrepair.scale import correlated_noise
+    from meshrepair.denoise.scale import correlated_noise
 
     if case == "kinect":
         Vt = read_mesh(C.mesh_path("published/tgv_kinect_pyramid__truth")).V
@@ -52,7 +54,7 @@ def main(argv=None) -> None:
                     help="round 9k's decision against round 11k's (instead of off / on)")
     ap.add_argument("--cases", nargs="+", default=list(MESHES))
     args = ap.parse_args(argv)
-    rules = importlib.import_module("meshrepair.denoise_rules")
+    rules = importlib.import_module("meshrepair.denoise.rules")
     C.limit_threads(1)
     info = C.machine_info()
     print(f"machine: {info}\n")

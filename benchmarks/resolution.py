@@ -54,7 +54,7 @@ BIG_SKIP_SUB1 = ("bunny",)
 
 
 def _manifold_single(V, F) -> bool:
-    from meshrepair.topology import edge_topology
+    from meshrepair.mesh.topology import edge_topology
 
     try:
         topo = edge_topology(F, len(V))

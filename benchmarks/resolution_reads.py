@@ -3,7 +3,8 @@
 
 For each row (mesh, level, noise of ``resolution.py``'s default grid, same cached inputs) the
 defaults run up to the crease-support read of the probe (the normals ``N¹`` handed to
-:func:`meshrepair.crease_network.supported`, captured there; the run stops at that point), and
+:func:`meshrepair.denoise.crease_network.supported`, captured there; the run stops at that point),
+and
 the script prints: the radius ``q`` of the noisy input and of the probe in mean edge lengths,
 γ̂, the supported fraction, round 11d's network branching β and side spread s, and per kept
 chain (longest first) its length, β_c, s_c, round 7's persistence ratio p, the straightness
@@ -35,7 +36,7 @@ class _Stop(Exception):
 def _probe_normals(Vn, F):
     """``(topo, N¹)`` of the defaults' probe on ``(Vn, F)``."""
     from meshrepair import denoise
-    from meshrepair import denoise_run as DR
+    from meshrepair.denoise import run as DR
 
     got = {}
     orig = DR._cn.supported
@@ -63,11 +64,11 @@ def reads(name, level, gamma, direction, k_straight: int = 4) -> dict:
     import scipy.sparse as sp
     from scipy.sparse.csgraph import shortest_path
 
-    from meshrepair import crease_network as cn
-    from meshrepair import regions as RG
-    from meshrepair.geometry import face_normals
-    from meshrepair.noise import noise_statistics
-    from meshrepair.scalefree import radius_in_edges
+    from meshrepair.denoise import crease_network as cn
+    from meshrepair.denoise import regions as RG
+    from meshrepair.denoise.scalefree import radius_in_edges
+    from meshrepair.mesh.geometry import face_normals
+    from meshrepair.model.noise import noise_statistics
 
     V, Vn, F = R.case_inputs(name, level, gamma, direction)
     topo, N = _probe_normals(Vn, F)

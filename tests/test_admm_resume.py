@@ -1,6 +1,6 @@
 """Round 11u: a run stopped by rule (35) at ``τ_1`` and resumed from its
-:class:`~meshrepair.solver.state.ADMMState` at ``τ_2 < τ_1`` is the same run as one solve at
-``τ_2`` (the stop only reads ``rel``; :mod:`meshrepair.solver.state`), and round 11s's gated
+:class:`~meshrepair.model.solver.state.ADMMState` at ``τ_2 < τ_1`` is the same run as one solve at
+``τ_2`` (the stop only reads ``rel``; :mod:`meshrepair.model.solver.state`), and round 11s's gated
 probe with its gate forced open equals round 11r's one-phase probe."""
 
 from dataclasses import replace
@@ -11,7 +11,7 @@ import trimesh
 
 from meshrepair import add_noise
 from meshrepair.errors import MeshRepairError
-from meshrepair.solver import ADMMSolver, SolverOptions, Stage
+from meshrepair.model.solver import ADMMSolver, SolverOptions, Stage
 
 
 def _noisy_box(n=3, gamma=0.2):
@@ -23,7 +23,7 @@ def _noisy_box(n=3, gamma=0.2):
 
 
 def _probe_stage():
-    from meshrepair.denoise_run import default_stages
+    from meshrepair.denoise.run import default_stages
 
     return replace(default_stages(robust_iters=300)[0], switch_tol=2e-3)
 
@@ -91,8 +91,8 @@ def test_resume_checks_its_input():
 
 
 def test_gated_probe_with_the_gate_open_is_the_one_phase_probe(monkeypatch):
-    from meshrepair import scalefree as sf
-    from meshrepair.topology import edge_topology
+    from meshrepair.denoise import scalefree as sf
+    from meshrepair.mesh.topology import edge_topology
 
     V, F = _noisy_box()
     st = _probe_stage()

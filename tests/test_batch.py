@@ -20,13 +20,13 @@ pytest.importorskip("distributed")  # a core dependency: this only guards a brok
 
 from distributed.diagnostics.plugin import WorkerPlugin  # noqa: E402
 
-from meshrepair import batch  # noqa: E402
+import meshrepair.batch.orchestrate as batch
+from meshrepair.batch.collection import collect_inputs  # noqa: E402
+from meshrepair.batch.jobs import run_job  # noqa: E402
 from meshrepair.cli import main  # noqa: E402
-from meshrepair.collection import collect_inputs  # noqa: E402
 from meshrepair.errors import MeshRepairError  # noqa: E402
 from meshrepair.io import read_mesh, write_mesh  # noqa: E402
-from meshrepair.jobs import run_job  # noqa: E402
-from meshrepair.noise import add_noise  # noqa: E402
+from meshrepair.model.noise import add_noise  # noqa: E402
 
 DATA = files("meshrepair") / "data"
 GOOD = ("a.ply", "sub/b.ply", "sub/deeper/c.obj")
@@ -368,7 +368,7 @@ def test_scheduler_option_with_separate_dask_processes(collection, tmp_path):
 
 
 def test_records_survive_an_interrupted_write_and_resume_rules(tmp_path):
-    from meshrepair.collection import RecordWriter, is_done, read_records
+    from meshrepair.batch.collection import RecordWriter, is_done, read_records
 
     w = RecordWriter(tmp_path)
     w.write({"rel": "a.ply", "status": "failed"})

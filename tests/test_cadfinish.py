@@ -1,15 +1,21 @@
-"""Tests of the CAD finish (meshrepair.cadfinish, issue 12 round 9c): its maths and its effect."""
+"""Tests of the CAD finish (meshrepair.denoise.cadfinish, issue 12 round 9c): its maths and its
+effect."""
 
 import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
 from meshrepair import denoise, mean_angle_error, msae
-from meshrepair.cadfinish import cad_finish, cad_finish_rule, crease_side_gate, finish_targets
-from meshrepair.geometry import face_normals
-from meshrepair.polish import _neighbourhood_csr, filter_normals
+from meshrepair.denoise.cadfinish import (
+    cad_finish,
+    cad_finish_rule,
+    crease_side_gate,
+    finish_targets,
+)
+from meshrepair.denoise.polish import _neighbourhood_csr, filter_normals
+from meshrepair.mesh.geometry import face_normals
+from meshrepair.mesh.topology import edge_topology
 from meshrepair.synthetic import grid_plane
-from meshrepair.topology import edge_topology
 
 from .conftest import needs_meshes, shared_mesh
 

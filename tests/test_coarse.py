@@ -1,5 +1,5 @@
 """The longer low-pass where the surface is smooth at the mesh's resolution
-(:mod:`meshrepair.coarse`, round 11c)."""
+(:mod:`meshrepair.denoise.coarse`, round 11c)."""
 
 from __future__ import annotations
 
@@ -8,8 +8,8 @@ import pytest
 import trimesh
 
 from meshrepair import add_noise, denoise, msae
-from meshrepair import coarse as co
-from meshrepair.topology import edge_topology
+from meshrepair.denoise import coarse as co
+from meshrepair.mesh.topology import edge_topology
 
 from .conftest import shared_mesh
 
@@ -42,7 +42,7 @@ def test_roughness_against_brute_force():
     X = V * (1 + 0.02 * rng.standard_normal(len(V)))[:, None]
     assert co.curvature_roughness(X, F, e, steps=0) == pytest.approx(
         _brute_roughness(X, F, e), rel=1e-6)
-    from meshrepair.lowpass import taubin_region  # the default read: after READ_STEPS pairs
+    from meshrepair.denoise.lowpass import taubin_region  # the default read: after READ_STEPS pairs
 
     Y = taubin_region(X, e, np.ones(len(X), bool), co.READ_STEPS)
     assert co.curvature_roughness(X, F, e) == pytest.approx(_brute_roughness(Y, F, e), rel=1e-6)
@@ -84,8 +84,8 @@ def test_fold_zone_is_fixed_and_the_rest_is_filtered():
     """A face turned over on a sphere: its vertices and FOLD_RINGS rings around them do not
     move (free_vertices); without the unfolding the fold stays, every other vertex is filtered;
     with it the fold is gone and the whole sphere is filtered."""
-    from meshrepair.relax import locally_flipped_faces
-    from meshrepair.topology import vertex_adjacency
+    from meshrepair.mesh.topology import vertex_adjacency
+    from meshrepair.model.relax import locally_flipped_faces
 
     V, F, e = _sphere(3)
     topo = edge_topology(F, len(V))

@@ -3,10 +3,10 @@
 import numpy as np
 import pytest
 
-from meshrepair import coarse_lowpass as clp
-from meshrepair.lowpass import taubin_region
-from meshrepair.presmooth import MAX_STEPS
-from meshrepair.scalefree import radius_in_edges
+from meshrepair.denoise import coarse_lowpass as clp
+from meshrepair.denoise.lowpass import taubin_region
+from meshrepair.denoise.presmooth import MAX_STEPS
+from meshrepair.denoise.scalefree import radius_in_edges
 
 
 def _sphere(subdivisions):
@@ -81,7 +81,7 @@ def _bumpy_sphere(freq=8.0, amp=0.2):
 def _low_pass_read(monkeypatch, Vn, F):
     """(steps asked by round 10h, K_q, probe roughness, steps taken) of denoise on (Vn, F)."""
     from meshrepair import denoise
-    from meshrepair.coarse import curvature_roughness
+    from meshrepair.denoise.coarse import curvature_roughness
 
     seen = {}
     orig = clp.capped_steps
@@ -103,7 +103,7 @@ def test_denoise_caps_the_low_pass_where_the_coarse_surface_has_relief(monkeypat
     # mesh's scale (probe roughness ≥ C_0) its length is K_q, on a plain sphere (no relief) it
     # is round 10h's, however coarse the mesh
     from meshrepair import add_noise
-    from meshrepair.coarse import C_0
+    from meshrepair.denoise.coarse import C_0
 
     V, F = _bumpy_sphere()
     k, K, c, taken = _low_pass_read(monkeypatch, add_noise(V, F, 0.6, direction="normal",

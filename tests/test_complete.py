@@ -13,7 +13,7 @@ import pytest
 import trimesh
 from scipy.spatial import cKDTree
 
-from meshrepair.complete import (
+from meshrepair.complete.api import (
     CompletionResult,
     _rings,
     complete,
@@ -21,13 +21,13 @@ from meshrepair.complete import (
     load_transform,
     region_from_vertices,
 )
-from meshrepair.correspondence import apply_transform, split_boundary_edges
+from meshrepair.complete.correspondence import apply_transform, split_boundary_edges
 from meshrepair.errors import MeshRepairError
-from meshrepair.geometry import dihedral_angles, face_normals, mean_edge_length
+from meshrepair.mesh.geometry import dihedral_angles, face_normals, mean_edge_length
+from meshrepair.mesh.topology import boundary_loops, edge_topology
+from meshrepair.mesh.validate import check_mesh
 from meshrepair.metrics import distances, point_to_surface
 from meshrepair.synthetic import geodesic_disc
-from meshrepair.topology import boundary_loops, edge_topology
-from meshrepair.validate import check_mesh
 
 from .bundled import bundled_mesh
 
@@ -554,8 +554,8 @@ def test_cli_complete(tmp_path, sphere):
 
 
 def test_split_ears_keeps_surface_and_orientation():
-    from meshrepair.complete import _split_ears
-    from meshrepair.geometry import face_normals_areas
+    from meshrepair.complete.api import _split_ears
+    from meshrepair.mesh.geometry import face_normals_areas
 
     # a fan of 6 triangles around a centre: every boundary vertex is shared by 2 faces, then
     # cut one face off so that the neighbours become ears of a 5-face fan plus one lone ear

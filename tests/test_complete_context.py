@@ -21,16 +21,16 @@ import numpy as np
 import pytest
 import trimesh
 
-from meshrepair.complete import complete, extract_patch
-from meshrepair.correspondence import apply_transform
+from meshrepair.complete.api import complete, extract_patch
+from meshrepair.complete.correspondence import apply_transform
+from meshrepair.complete.rigid import reflection
+from meshrepair.complete.symmetry import detect_symmetry
 from meshrepair.errors import MeshRepairError
-from meshrepair.geometry import mean_edge_length
 from meshrepair.io import read_mesh
+from meshrepair.mesh.geometry import mean_edge_length
+from meshrepair.mesh.validate import check_mesh
 from meshrepair.metrics import point_to_surface
-from meshrepair.rigid import reflection
-from meshrepair.symmetry import detect_symmetry
 from meshrepair.synthetic import DAMAGES, damage_region, geodesic_disc, random_rigid, symmetrize
-from meshrepair.validate import check_mesh
 
 from .conftest import shared_mesh
 
@@ -121,7 +121,7 @@ def test_alignment_report_warns_on_a_template_that_does_not_fit(fandisk, caplog)
     faces, _ = geodesic(V, F, 3000, 6 * l)
     VP, FP = extract_patch(V, F, faces)
     c = VP.mean(axis=0)
-    with caplog.at_level(logging.WARNING, logger="meshrepair.alignment"):
+    with caplog.at_level(logging.WARNING, logger="meshrepair.complete.alignment"):
         res = complete(V, F, faces, ((VP - c) * 1.3 + c, FP), iterations=5)
     a = res.alignment
     assert a["warning"] and a["boundary_rms"] > 0.5

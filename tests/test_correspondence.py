@@ -1,10 +1,11 @@
-"""Boundary resampling, cyclic correspondence, alignment and ICP (meshrepair.correspondence)."""
+"""Boundary resampling, cyclic correspondence, alignment and ICP
+(meshrepair.complete.correspondence)."""
 
 import numpy as np
 import pytest
 import trimesh
 
-from meshrepair.correspondence import (
+from meshrepair.complete.correspondence import (
     align_loops,
     apply_transform,
     arc_length_parameters,
@@ -21,10 +22,10 @@ from meshrepair.correspondence import (
     uniform_split_params,
 )
 from meshrepair.errors import MeshRepairError
-from meshrepair.geometry import face_normals_areas
+from meshrepair.mesh.geometry import face_normals_areas
+from meshrepair.mesh.topology import boundary_loops
+from meshrepair.mesh.validate import check_mesh
 from meshrepair.metrics import point_to_surface
-from meshrepair.topology import boundary_loops
-from meshrepair.validate import check_mesh
 
 
 def random_rotation(rng):
@@ -305,7 +306,7 @@ def test_icp_loop_to_polyline_recovers_small_motion(rng):
     T = similarity(rng, scale=1.0, shift=0.0)
     # a small motion: interpolate the rotation towards identity
     w = 0.03 * rng.normal(size=3)
-    from meshrepair.correspondence import _rotation_vector
+    from meshrepair.complete.correspondence import _rotation_vector
 
     M = np.eye(4)
     M[:3, :3] = _rotation_vector(w)
@@ -343,7 +344,7 @@ def bumpy_patch():
 
 def test_point_to_plane_icp_recovers_rigid_motion_exactly(rng):
     V, F = bumpy_patch()
-    from meshrepair.correspondence import _rotation_vector
+    from meshrepair.complete.correspondence import _rotation_vector
 
     M = np.eye(4)
     M[:3, :3] = _rotation_vector(np.array([0.05, -0.03, 0.04]))

@@ -1,5 +1,5 @@
 """The low-pass at the noise's scale for correlated noise on organic meshes
-(:mod:`meshrepair.corrlowpass`, round 11q)."""
+(:mod:`meshrepair.denoise.corrlowpass`, round 11q)."""
 
 from __future__ import annotations
 
@@ -8,9 +8,9 @@ import pytest
 import trimesh
 
 from meshrepair import add_noise, denoise, msae
-from meshrepair import corrlowpass as cl
-from meshrepair.scale import correlated_noise
-from meshrepair.topology import edge_topology
+from meshrepair.denoise import corrlowpass as cl
+from meshrepair.denoise.scale import correlated_noise
+from meshrepair.mesh.topology import edge_topology
 
 
 def _sphere(subdivisions: int = 4):

@@ -1,5 +1,6 @@
-"""The band read of correlated noise (:mod:`meshrepair.corrwhite`, round 11y) and branch 2 of
-the correlated low-pass gate (:func:`meshrepair.corrlowpass.white_steps`)."""
+"""The band read of correlated noise (:mod:`meshrepair.denoise.corrwhite`, round 11y) and branch 2
+of
+the correlated low-pass gate (:func:`meshrepair.denoise.corrlowpass.white_steps`)."""
 
 from __future__ import annotations
 
@@ -8,10 +9,10 @@ import pytest
 import trimesh
 
 from meshrepair import add_noise, denoise, msae
-from meshrepair import corrlowpass as cl
-from meshrepair.corrwhite import CANDIDATE_STEPS, band_models, band_read
-from meshrepair.scale import _interior_vertices, _umbrella_operator, correlated_noise
-from meshrepair.topology import edge_topology
+from meshrepair.denoise import corrlowpass as cl
+from meshrepair.denoise.corrwhite import CANDIDATE_STEPS, band_models, band_read
+from meshrepair.denoise.scale import _interior_vertices, _umbrella_operator, correlated_noise
+from meshrepair.mesh.topology import edge_topology
 
 from .test_denoise_model import grid
 

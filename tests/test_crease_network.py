@@ -1,4 +1,5 @@
-"""Is the probe's crease network a CAD part's creases or noise (:mod:`meshrepair.crease_network`,
+"""Is the probe's crease network a CAD part's creases or noise
+(:mod:`meshrepair.denoise.crease_network`,
 issue 12, round 11d)."""
 
 from __future__ import annotations
@@ -8,12 +9,12 @@ import pytest
 import trimesh
 
 from meshrepair import add_noise, denoise, msae
-from meshrepair import crease_network as cn
-from meshrepair import presmooth as ps
 from meshrepair.baselines import taubin_smooth
-from meshrepair.geometry import face_normals
-from meshrepair.regions import creased_edges, long_chains
-from meshrepair.topology import edge_topology
+from meshrepair.denoise import crease_network as cn
+from meshrepair.denoise import presmooth as ps
+from meshrepair.denoise.regions import creased_edges, long_chains
+from meshrepair.mesh.geometry import face_normals
+from meshrepair.mesh.topology import edge_topology
 
 from .bundled import bundled_mesh
 from .test_regions import ROOF, _strip

@@ -6,12 +6,12 @@ import trimesh
 
 import meshrepair
 from meshrepair.baselines import bilateral_normal_filter, taubin_smooth
-from meshrepair.denoise import denoise
-from meshrepair.geometry import dihedral_angles, face_normals, mean_edge_length
+from meshrepair.denoise.api import denoise
+from meshrepair.mesh.geometry import dihedral_angles, face_normals, mean_edge_length
+from meshrepair.mesh.topology import edge_topology
 from meshrepair.metrics import msae, vertex_error
-from meshrepair.noise import add_noise, estimate_noise
-from meshrepair.solver import StopRequested
-from meshrepair.topology import edge_topology
+from meshrepair.model.noise import add_noise, estimate_noise
+from meshrepair.model.solver import StopRequested
 
 from .bundled import bundled_mesh
 from .conftest import shared_mesh
@@ -156,7 +156,7 @@ def test_open_mesh_keeps_boundary_sensible():
     V, F = np.asarray(sub.vertices), np.asarray(sub.faces)
     Vn = add_noise(V, F, 0.2, seed=2)
     r = denoise(Vn, F)
-    from meshrepair.topology import boundary_loops
+    from meshrepair.mesh.topology import boundary_loops
 
     b = boundary_loops(F)[0]
     h = mean_edge_length(V, F)
@@ -170,8 +170,8 @@ def test_real_scan_rabbit_defaults():
     lower the estimated noise at least 3x without folding faces, shrinking the shape or moving
     the open border. Measured: noise 0.095 -> 0.019 edge lengths, mean move 0.09 edge, bbox
     within 0.4 %."""
-    from meshrepair.relax import locally_flipped_faces
-    from meshrepair.topology import boundary_loops
+    from meshrepair.mesh.topology import boundary_loops
+    from meshrepair.model.relax import locally_flipped_faces
 
     V, F = shared_mesh("scans/rabbit_scan.ply")
     r = denoise(V, F)
@@ -248,7 +248,7 @@ def test_direct_and_iterative_backends_agree(spot):
 def test_locality_reordering_maps_back_exactly(spot, monkeypatch):
     import sys
 
-    dmod = sys.modules["meshrepair.denoise_run"]  # where the run reads it
+    dmod = sys.modules["meshrepair.denoise.analysis"]  # where the plan reads it
 
     V, F = spot
     Vn = add_noise(V, F, 0.2, seed=9)

@@ -12,8 +12,8 @@ import pytest
 import trimesh
 
 import meshrepair as mr
-from meshrepair.relax import locally_flipped_faces, untangle
-from meshrepair.topology import edge_topology
+from meshrepair.mesh.topology import edge_topology
+from meshrepair.model.relax import locally_flipped_faces, untangle
 
 TET_V = np.array([[1, 1, 1], [1, -1, -1], [-1, 1, -1], [-1, -1, 1.0]])
 TET_F = np.array([[0, 1, 2], [0, 3, 1], [0, 2, 3], [1, 3, 2]])
@@ -48,7 +48,7 @@ def test_noisy_tetrahedron_does_not_collapse(seed):
 @pytest.mark.parametrize("direction", ["normal", "random"])
 def test_collapsing_robust_stage_is_solved_again_without_it(direction, caplog):
     Vn = mr.add_noise(TET_V, TET_F, 0.1, direction=direction, seed=3)
-    with caplog.at_level(logging.WARNING, logger="meshrepair.denoise"):
+    with caplog.at_level(logging.WARNING, logger="meshrepair.denoise.api"):
         r = mr.denoise(Vn, TET_F)
     assert "solving again without it" in caplog.text  # the robust stage alone: volume ~0.01
     assert r.params["robust_iters"] == 0

@@ -7,11 +7,11 @@ from scipy.optimize import minimize
 
 from meshrepair import denoise, mean_angle_error, msae
 from meshrepair.baselines import taubin_smooth
-from meshrepair.fidelity import huber, huber_split_objective, prox_group_l1
-from meshrepair.regions import crease_support
-from meshrepair.scale import correlated_noise, noise_scale
-from meshrepair.solver import ADMMSolver, SolverOptions, Stage
-from meshrepair.topology import edge_topology
+from meshrepair.denoise.regions import crease_support
+from meshrepair.denoise.scale import correlated_noise, noise_scale
+from meshrepair.mesh.topology import edge_topology
+from meshrepair.model.fidelity import huber, huber_split_objective, prox_group_l1
+from meshrepair.model.solver import ADMMSolver, SolverOptions, Stage
 
 from .conftest import published_triple, shared_mesh
 
@@ -160,7 +160,7 @@ def test_quality_shared_kinect():
 # -- flat-TV edge class ----------------------------------------------------------------------
 
 def test_t_update_mixed_matches_brute_force():
-    from meshrepair.priors import reg_energy_mixed, t_update_mixed
+    from meshrepair.model.priors import reg_energy_mixed, t_update_mixed
 
     rng = np.random.default_rng(5)
     n, a, af, beta1, w = 30, 10.0, 0.5, 12.0, 2.0
@@ -205,12 +205,12 @@ def test_unfolded_mesh_is_the_start_and_the_input_the_data(monkeypatch):
     surfaces smooth at the mesh's resolution, which this sphere is) is switched off: it moves
     the layout after the solve, which is what this test measures."""
     from meshrepair import add_noise
-    from meshrepair import coarse as _co
+    from meshrepair.denoise import coarse as _co
 
     monkeypatch.setattr(_co, "COARSE", False)
-    from meshrepair.denoise import fidelity_data
-    from meshrepair.relax import untangle
-    from meshrepair.topology import edge_topology
+    from meshrepair.denoise.api import fidelity_data
+    from meshrepair.mesh.topology import edge_topology
+    from meshrepair.model.relax import untangle
 
     ico = trimesh.creation.icosphere(subdivisions=3)
     V = np.asarray(ico.vertices) * 10
@@ -263,9 +263,9 @@ def test_quality_published_trim_star_beats_gcn():
 def test_unfold_result_removes_folds_locally():
     """``unfold_result``: a face folded over in a result is unfolded, vertices away from the
     fold do not move, and a result without folds is returned as is."""
-    from meshrepair.denoise import unfold_result
-    from meshrepair.relax import locally_flipped_faces
-    from meshrepair.topology import edge_topology
+    from meshrepair.denoise.api import unfold_result
+    from meshrepair.mesh.topology import edge_topology
+    from meshrepair.model.relax import locally_flipped_faces
 
     ico = trimesh.creation.icosphere(subdivisions=3)
     V = np.asarray(ico.vertices) * 10
@@ -290,8 +290,8 @@ def test_denoise_result_has_no_folds():
     there is no reference for the cluster check, so every fold is unfolded; with it, the probe
     (λ = 200 holds it to the folded data too) is folded there as well and the fold is kept."""
     from meshrepair import add_noise
-    from meshrepair.relax import locally_flipped_faces
-    from meshrepair.topology import edge_topology
+    from meshrepair.mesh.topology import edge_topology
+    from meshrepair.model.relax import locally_flipped_faces
 
     ico = trimesh.creation.icosphere(subdivisions=3)
     V = np.asarray(ico.vertices) * 10
@@ -311,9 +311,9 @@ def test_unfold_result_cluster_check():
     """With a reference, a cluster keeps its unfolded positions only when its faces then agree
     better with the reference normals: a reference equal to the folded result (the fold is
     "true") keeps the fold, the clean mesh as reference accepts the unfolding."""
-    from meshrepair.denoise import unfold_result
-    from meshrepair.relax import locally_flipped_faces
-    from meshrepair.topology import edge_topology
+    from meshrepair.denoise.api import unfold_result
+    from meshrepair.mesh.topology import edge_topology
+    from meshrepair.model.relax import locally_flipped_faces
 
     ico = trimesh.creation.icosphere(subdivisions=3)
     V = np.asarray(ico.vertices) * 10

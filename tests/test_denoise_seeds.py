@@ -11,10 +11,10 @@ import numpy as np
 import pytest
 
 import meshrepair
-from meshrepair import denoise_folds as folds_mod
+from meshrepair.denoise import folds as folds_mod
+from meshrepair.mesh.topology import edge_topology
 from meshrepair.metrics import msae
-from meshrepair.relax import locally_flipped_faces
-from meshrepair.topology import edge_topology
+from meshrepair.model.relax import locally_flipped_faces
 
 from .bundled import bundled_mesh
 

@@ -1,4 +1,4 @@
-"""The discrepancy test on the outside weight (:mod:`meshrepair.discrepancy`, round 9s)."""
+"""The discrepancy test on the outside weight (:mod:`meshrepair.denoise.discrepancy`, round 9s)."""
 
 from __future__ import annotations
 
@@ -7,8 +7,8 @@ import pytest
 import trimesh
 
 from meshrepair import add_noise, denoise, msae
-from meshrepair import discrepancy as dq
-from meshrepair.geometry import mean_edge_length, vertex_normals
+from meshrepair.denoise import discrepancy as dq
+from meshrepair.mesh.geometry import mean_edge_length, vertex_normals
 
 from .conftest import shared_mesh
 

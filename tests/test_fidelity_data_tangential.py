@@ -6,16 +6,16 @@ import pytest
 import scipy.sparse as sp
 
 from meshrepair import add_noise, denoise, msae
-from meshrepair.denoise_folds import (
+from meshrepair.denoise.folds import (
     UNFOLD_DATA_CAD_SUPPORT,
     UNFOLD_DATA_TANGENTIAL_MAX,
     unfolded_data_after_probe,
 )
-from meshrepair.denoise_rules import CAD_SUPPORT, TANGENTIAL_MAX
-from meshrepair.geometry import mean_edge_length, vertex_normals
-from meshrepair.relax import untangle
+from meshrepair.denoise.rules import CAD_SUPPORT, TANGENTIAL_MAX
+from meshrepair.mesh.geometry import mean_edge_length, vertex_normals
+from meshrepair.mesh.topology import edge_topology
+from meshrepair.model.relax import untangle
 from meshrepair.synthetic import impulsive_noise
-from meshrepair.topology import edge_topology
 
 from .bundled import bundled_mesh
 

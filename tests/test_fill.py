@@ -18,11 +18,11 @@ from scipy.spatial import cKDTree
 
 from meshrepair.errors import MeshRepairError
 from meshrepair.fill import FillResult, fill_holes, inpaint, region_mask
-from meshrepair.geometry import dihedral_angles, face_normals, mean_edge_length
 from meshrepair.holes import self_intersections
+from meshrepair.mesh.geometry import dihedral_angles, face_normals, mean_edge_length
+from meshrepair.mesh.topology import boundary_loops, edge_topology
+from meshrepair.mesh.validate import check_mesh
 from meshrepair.metrics import distances
-from meshrepair.topology import boundary_loops, edge_topology
-from meshrepair.validate import check_mesh
 
 from .conftest import SHARED, grid, needs_meshes, shared_mesh
 
@@ -218,7 +218,7 @@ def test_hole_wrapping_a_thin_wall_is_filled_by_the_minimum_weight_fallback(fand
     its (unfaired) surface fills the hole without intersections. It is a coarse tent over the
     rim, not the rounded rim: measured mean 17.6e-3, Hausdorff 87e-3 of the diagonal, normals 53°
     off (the smooth CAD fills elsewhere in this file: 0.1-15e-3)."""
-    import meshrepair.fill as fill_mod
+    import meshrepair.fill.options as fill_mod
 
     V, F = fandisk
     diag = np.linalg.norm(V.max(axis=0) - V.min(axis=0))
@@ -303,7 +303,7 @@ def test_admm_refines_a_flat_start(spot_fine):
 
 @needs_meshes
 def test_fill_and_denoise_join_without_step():
-    from meshrepair.noise import add_noise
+    from meshrepair.model.noise import add_noise
 
     V, F = _read("spot")
     Vn = add_noise(V, F, 0.2, seed=1)
@@ -617,7 +617,7 @@ def test_real_scan_rabbit_small_hole_filled_opening_kept_or_refused():
     keep_border the small hole is closed and the opening kept; without, the opening is
     recognised as the open border by its size and left open with that reason, and the rest is
     still filled."""
-    from meshrepair.topology import boundary_loops
+    from meshrepair.mesh.topology import boundary_loops
 
     V, F = shared_mesh("scans/rabbit_scan.ply")
     kept = fill_holes(V, F, keep_border=True)

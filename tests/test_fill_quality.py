@@ -40,7 +40,7 @@ def test_flat_patch_in_a_sphere_is_flagged():
 
 
 def test_quality_in_the_html_hole_table():
-    from meshrepair.report_html import hole_table
+    from meshrepair.report.fragments import hole_table
 
     Vc, Fc = _sphere_hole(4)
     res = fill_holes(Vc, Fc)

@@ -1,5 +1,5 @@
 """The length of round 10h's low-pass where the surface carries relief at its own scale
-(:mod:`meshrepair.heavylength`, round 11t)."""
+(:mod:`meshrepair.denoise.heavylength`, round 11t)."""
 
 from __future__ import annotations
 
@@ -8,10 +8,10 @@ import pytest
 import trimesh
 
 from meshrepair import add_noise, denoise, msae
-from meshrepair import heavylength as hl
-from meshrepair import presmooth as ps
-from meshrepair.coarse import curvature_roughness
-from meshrepair.topology import edge_topology
+from meshrepair.denoise import heavylength as hl
+from meshrepair.denoise import presmooth as ps
+from meshrepair.denoise.coarse import curvature_roughness
+from meshrepair.mesh.topology import edge_topology
 
 from .conftest import shared_mesh
 
@@ -97,7 +97,7 @@ def test_relief_read_takes_out_the_filtered_noise():
     g = 0.3
     e = np.random.default_rng(hl.NOISE_SEED).standard_normal(n) * (g * ell)
     e = np.linalg.matrix_power(T, k) @ e
-    from meshrepair.geometry import vertex_normals
+    from meshrepair.mesh.geometry import vertex_normals
 
     h = np.sum((B @ X) * vertex_normals(X, F), axis=1)
     r, he = B @ h, B @ e
@@ -111,13 +111,13 @@ def test_relief_read_takes_out_the_filtered_noise():
 
 
 def ps_lam():
-    from meshrepair.lowpass import TAUBIN_LAM
+    from meshrepair.denoise.lowpass import TAUBIN_LAM
 
     return TAUBIN_LAM
 
 
 def ps_mu():
-    from meshrepair.lowpass import TAUBIN_MU
+    from meshrepair.denoise.lowpass import TAUBIN_MU
 
     return TAUBIN_MU
 

@@ -9,12 +9,12 @@ import re
 import numpy as np
 import pytest
 
-from meshrepair.complete import complete
+from meshrepair.complete.api import complete
 from meshrepair.errors import MeshRepairError
 from meshrepair.fill import fill_holes
-from meshrepair.framing import frame_hole
 from meshrepair.holes import find_holes
-from meshrepair.topology import boundary_loops
+from meshrepair.mesh.topology import boundary_loops
+from meshrepair.render.framing import frame_hole
 
 from .conftest import grid, shared_mesh
 

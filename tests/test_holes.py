@@ -17,8 +17,8 @@ from meshrepair.holes import (
     self_intersections,
 )
 from meshrepair.holes import liepa as HL
-from meshrepair.topology import boundary_loops, edge_topology
-from meshrepair.validate import check_mesh
+from meshrepair.mesh.topology import boundary_loops, edge_topology
+from meshrepair.mesh.validate import check_mesh
 
 from .conftest import SHARED, grid, needs_meshes
 

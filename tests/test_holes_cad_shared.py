@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from meshrepair.fill import fill_holes
-from meshrepair.geometry import mean_edge_length
+from meshrepair.mesh.geometry import mean_edge_length
 
 from .conftest import shared_mesh
 

@@ -15,8 +15,8 @@ from meshrepair.fill import fill_holes
 from meshrepair.holes import find_holes
 from meshrepair.holes.border import ENCLOSED, classify_loops
 from meshrepair.holes.closure import loop_enclosure, solid_angle_sum
+from meshrepair.mesh.topology import boundary_loops
 from meshrepair.synthetic import cut_holes
-from meshrepair.topology import boundary_loops
 
 from .conftest import grid, shared_mesh
 

@@ -6,9 +6,9 @@ from __future__ import annotations
 import numpy as np
 
 from meshrepair.fill import inpaint
-from meshrepair.geometry import face_normals
 from meshrepair.holes.creases import CreaseEnd, _exact_corner, route_creases
-from meshrepair.validate import check_mesh
+from meshrepair.mesh.geometry import face_normals
+from meshrepair.mesh.validate import check_mesh
 
 
 def _slab():

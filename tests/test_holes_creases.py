@@ -7,11 +7,11 @@ import numpy as np
 import pytest
 
 from meshrepair.fill import _edge_ids, fill_holes, inpaint
-from meshrepair.geometry import dihedral_angles, face_normals
 from meshrepair.holes import find_holes
 from meshrepair.holes.creases import SharpGraph, crease_ends, route_creases
-from meshrepair.topology import edge_topology
-from meshrepair.validate import check_mesh
+from meshrepair.mesh.geometry import dihedral_angles, face_normals
+from meshrepair.mesh.topology import edge_topology
+from meshrepair.mesh.validate import check_mesh
 
 
 def _merged(V, F):

@@ -72,7 +72,7 @@ def test_cylinder_hole_liepa_patch_on_the_cylinder(monkeypatch):
     """The same hole (radius 0.6) enclosed by Liepa's triangulation, whose thin plate uses the
     bounded cotangents: still on the cylinder within 0.002 (measured 0.0004; exact cotangents
     0.0005)."""
-    import meshrepair.fill as mf
+    import meshrepair.fill.options as mf
 
     monkeypatch.setattr(mf, "ENCLOSE_ORDER", ("liepa",))
     V, F = _cylinder()

@@ -2,8 +2,8 @@ import numpy as np
 import pytest
 import trimesh
 
-from meshrepair.geometry import face_normals
-from meshrepair.inner import INNER_SOLVERS, InnerState, VSubproblem, run_inner
+from meshrepair.mesh.geometry import face_normals
+from meshrepair.model.inner import INNER_SOLVERS, InnerState, VSubproblem, run_inner
 
 
 def _problem(rng, fixed=None):
@@ -93,7 +93,7 @@ def test_sliver_does_not_stall_descent(rng):
 def test_fused_preconditioned_armijo_equals_the_unfused_loop(rng):
     """solve_armijo's fused passes give the iterates of the textbook loop (diag_scale once,
     d = -D⁻¹g, backtracking from twice the last step with numpy temporaries)."""
-    from meshrepair.inner import _armijo_line
+    from meshrepair.model.inner import _armijo_line
 
     prob, V, *_ = _problem(rng)
 

@@ -7,8 +7,8 @@ import numpy as np
 import pytest
 
 from meshrepair.fill import inpaint
-from meshrepair.geometry import mean_edge_length
-from meshrepair.topology import boundary_loops, edge_topology
+from meshrepair.mesh.geometry import mean_edge_length
+from meshrepair.mesh.topology import boundary_loops, edge_topology
 
 from .conftest import grid, shared_mesh
 

@@ -12,7 +12,7 @@ import pytest
 import trimesh
 
 from meshrepair.cli import main
-from meshrepair.complete import load_transform
+from meshrepair.complete.api import load_transform
 from meshrepair.errors import MeshRepairError
 from meshrepair.io import read_mesh, read_vertex_mask, write_mesh
 

@@ -10,8 +10,8 @@ import scipy.sparse as sp
 import trimesh
 
 from meshrepair import _kernels as K
-from meshrepair.linear import NormalSystem, block_pcg
-from meshrepair.topology import edge_topology
+from meshrepair.mesh.topology import edge_topology
+from meshrepair.model.linear import NormalSystem, block_pcg
 
 pytestmark = pytest.mark.skipif(not K.HAVE_NUMBA, reason="numba not installed: only numpy path")
 
@@ -147,7 +147,7 @@ def test_face_neighbour_table_kernel_agrees(mesh):
 
 
 def test_creased_edges_match_dihedral_threshold(mesh):
-    from meshrepair.geometry import dihedral_angles, face_normals
+    from meshrepair.mesh.geometry import dihedral_angles, face_normals
 
     V, F = mesh
     topo = edge_topology(F, len(V))
@@ -164,7 +164,7 @@ def test_creased_edges_match_dihedral_threshold(mesh):
 def test_fused_armijo_kernels_agree_with_numpy(mesh, rng):
     """The fused V-descent passes (energy + gradient + Jacobi scale, direction, trial point)
     equal their numpy twins and the unfused kernels."""
-    from meshrepair import _fused as FU
+    import meshrepair.model._fused as FU
 
     V, F = mesh
     z = rng.normal(size=(len(F), 3))
@@ -208,7 +208,7 @@ def test_fused_armijo_kernels_agree_with_numpy(mesh, rng):
 
 
 def test_rel_change_kernel_agrees(mesh, rng):
-    from meshrepair import _fused as FU
+    import meshrepair.model._fused as FU
 
     V, _ = mesh
     W = V + 1e-3 * rng.normal(size=V.shape)
@@ -235,7 +235,7 @@ def test_kernels_compile_without_a_writable_numba_cache():
 def test_fused_multiplier_and_history_kernels_agree(mesh, rng):
     """Normals + (21) in one face pass, lengths + regulariser of (6) in one edge pass: equal to
     the separate kernels (and so to their numpy twins)."""
-    from meshrepair import _fused as FU
+    import meshrepair.model._fused as FU
 
     V, F = mesh
     V = V.copy()
@@ -264,8 +264,8 @@ def test_fused_multiplier_and_history_kernels_agree(mesh, rng):
 @pytest.mark.parametrize("with_flat", [False, True])
 def test_fused_t_update_matches_separate_kernels(mesh, rng, a, a_flat, beta1, w, with_flat):
     from meshrepair._kernels.tstep import _np_t_from_normals, t_from_normals
-    from meshrepair.penalties import t_update
-    from meshrepair.priors import t_update_mixed
+    from meshrepair.model.penalties import t_update
+    from meshrepair.model.priors import t_update_mixed
 
     V, F = mesh
     topo = edge_topology(F, len(V))
@@ -296,7 +296,7 @@ def test_fused_t_update_matches_separate_kernels(mesh, rng, a, a_flat, beta1, w,
 
 
 def test_anchor_with_unit_weight_projects_onto_the_normal_lines(mesh, rng):
-    from meshrepair.fidelity import tangential_anchor
+    from meshrepair.model.fidelity import tangential_anchor
 
     V, F = mesh
     V0 = V + 0.1 * rng.normal(size=V.shape)

@@ -1,6 +1,6 @@
 """The compiled kernels of the flat-TV class (t-update, lengths + regulariser) and of the
 tangential anchor agree with their numpy twins, and the solver's mixed-class history energy is the
-regulariser of :mod:`meshrepair.priors` evaluated directly."""
+regulariser of :mod:`meshrepair.model.priors` evaluated directly."""
 
 import numpy as np
 import pytest
@@ -9,8 +9,8 @@ import trimesh
 from meshrepair import _kernels as K
 from meshrepair._kernels import fidelity as KF
 from meshrepair._kernels import priors as KP
-from meshrepair.priors import reg_energy_mixed
-from meshrepair.topology import edge_topology
+from meshrepair.mesh.topology import edge_topology
+from meshrepair.model.priors import reg_energy_mixed
 
 needs_numba = pytest.mark.skipif(not K.HAVE_NUMBA, reason="numba not installed: only numpy path")
 
@@ -45,7 +45,7 @@ def test_t_update_mixed_kernel_agrees_with_numpy(rng):
         assert not t1[:5].any()
         # the composition it replaced (compiled t_update, then prox_mc on the flat edges): equal
         # bit for bit, so the solver's iterates do not change
-        from meshrepair.penalties import prox_mc, t_update
+        from meshrepair.model.penalties import prox_mc, t_update
 
         t3 = t_update(DN, rho1, sharp, a=a, beta1=b1, willmore_weight=w)
         f = flat & ~sharp
@@ -77,7 +77,8 @@ def test_lengths_reg_energy_mixed_kernel_agrees(mesh, rng):
 
 
 def test_lengths_reg_energy_mixed_is_the_mixed_regulariser(mesh, rng):
-    """The history energy of a flat-TV stage: R(t) of meshrepair.priors at t = l (Nv_a - Nv_b),
+    """The history energy of a flat-TV stage: R(t) of meshrepair.model.priors at t = l (Nv_a -
+    Nv_b),
     whichever path (compiled or numpy) is installed."""
     V, F = mesh
     E, fa, fb = _edges(V, F)

@@ -10,7 +10,7 @@ import trimesh
 from meshrepair import _kernels as K
 from meshrepair._kernels import priors as KP
 from meshrepair._kernels import weighted as KW
-from meshrepair.topology import edge_topology
+from meshrepair.mesh.topology import edge_topology
 
 needs_numba = pytest.mark.skipif(not K.HAVE_NUMBA, reason="numba not installed: only numpy path")
 
@@ -62,7 +62,7 @@ def test_t_from_normals_weighted_refuses_a_weak_beta1(mesh):
 
 
 def test_lengths_reg_energy_weighted_is_the_two_passes(mesh, rng):
-    from meshrepair import _fused
+    import meshrepair.model._fused as _fused
 
     V, F = mesh
     _, E, fa, fb = _interior(V, F)
@@ -86,7 +86,7 @@ def test_lengths_reg_energy_weighted_is_the_two_passes(mesh, rng):
 
 @needs_numba
 def test_closest_points_kernel_equals_numpy_twin(mesh, rng):
-    from meshrepair import reproject as R
+    from meshrepair.denoise import reproject as R
 
     V, F = mesh
     le = float(K.edge_lengths(V, edge_topology(F, len(V)).edges).mean())
@@ -108,7 +108,7 @@ def test_closest_points_kernel_equals_numpy_twin(mesh, rng):
 
 
 def test_unique_edges_are_the_topology_edges(mesh):
-    from meshrepair.geometry import edge_lengths, mean_edge_length, unique_edges
+    from meshrepair.mesh.geometry import edge_lengths, mean_edge_length, unique_edges
 
     V, F = mesh
     topo = edge_topology(F, len(V))
@@ -121,7 +121,7 @@ def test_unique_edges_are_the_topology_edges(mesh):
 
 
 def test_discrepancy_with_edges_equals_without(mesh, rng):
-    from meshrepair import discrepancy as dq
+    from meshrepair.denoise import discrepancy as dq
 
     V, F = mesh
     topo = edge_topology(F, len(V))
@@ -132,8 +132,8 @@ def test_discrepancy_with_edges_equals_without(mesh, rng):
 
 
 def test_cad_finish_targets_with_shared_face_geometry(mesh):
-    from meshrepair import cadfinish as cf
-    from meshrepair.polish import _neighbourhood_csr, _normals_areas
+    from meshrepair.denoise import cadfinish as cf
+    from meshrepair.denoise.polish import _neighbourhood_csr, _normals_areas
 
     V, F = mesh
     topo = edge_topology(F, len(V))

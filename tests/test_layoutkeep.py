@@ -1,4 +1,4 @@
-"""The layout-keeping resampling of the full-step low-passes (:mod:`meshrepair.layoutkeep`,
+"""The layout-keeping resampling of the full-step low-passes (:mod:`meshrepair.denoise.layoutkeep`,
 round 11x)."""
 
 from __future__ import annotations
@@ -8,9 +8,9 @@ import pytest
 import trimesh
 
 from meshrepair import add_noise, denoise, msae, vertex_error
-from meshrepair import layoutkeep as lk
-from meshrepair.lowpass import taubin_region
-from meshrepair.topology import edge_topology
+from meshrepair.denoise import layoutkeep as lk
+from meshrepair.denoise.lowpass import taubin_region
+from meshrepair.mesh.topology import edge_topology
 
 from .conftest import shared_mesh
 
@@ -76,7 +76,7 @@ def test_sphere_keeps_the_surface_and_returns_the_layout():
     S /= np.linalg.norm(S, axis=1)[:, None]  # the reference's layout, on the sphere
     R = S * (1 + 0.3 * el * rng.standard_normal(len(X)))[:, None]  # plus noise along normals
     Y = lk.keep_layout(X, R, F, topo.edges)
-    from meshrepair.reproject import closest_points_local
+    from meshrepair.denoise.reproject import closest_points_local
 
     assert np.abs(closest_points_local(X, F, Y) - Y).max() < 1e-12  # on X's surface
     before = np.linalg.norm(X - S, axis=1).mean()

@@ -45,7 +45,8 @@ def test_package_and_cli_parser_do_not_load_numba_or_scipy():
 def test_submodule_import_first_keeps_the_functions():
     """``meshrepair.denoise`` / ``meshrepair.complete`` stay the public functions even when
     their modules were imported first (as the eager imports had it)."""
-    out = _run("import meshrepair.denoise, meshrepair.complete as c, sys; import meshrepair as m;"
-               "print(callable(m.denoise) and m.denoise is sys.modules['meshrepair.denoise']"
-               ".denoise, callable(m.complete), callable(c))")
+    out = _run("import meshrepair.denoise.api, meshrepair.complete as c, sys; "
+               "import meshrepair as m; print(callable(m.denoise) and m.denoise is "
+               "sys.modules['meshrepair.denoise.api'].denoise, callable(m.complete), "
+               "callable(c))")
     assert out == "True True True"

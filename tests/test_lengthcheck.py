@@ -1,4 +1,4 @@
-"""The risk check of round 11t's shorter low-pass length (:mod:`meshrepair.lengthcheck`,
+"""The risk check of round 11t's shorter low-pass length (:mod:`meshrepair.denoise.lengthcheck`,
 round 11z)."""
 
 from __future__ import annotations
@@ -7,10 +7,10 @@ import numpy as np
 import pytest
 import trimesh
 
-from meshrepair import lengthcheck as lc
-from meshrepair.geometry import vertex_normals
-from meshrepair.presmooth import presmooth
-from meshrepair.topology import edge_topology
+from meshrepair.denoise import lengthcheck as lc
+from meshrepair.denoise.presmooth import presmooth
+from meshrepair.mesh.geometry import vertex_normals
+from meshrepair.mesh.topology import edge_topology
 
 
 def _sphere(sub: int = 4, bumps: float = 0.0, freq: float = 12.0):

@@ -1,4 +1,4 @@
-"""The final low-pass step on the smooth region (:mod:`meshrepair.lowpass`, round 9s)."""
+"""The final low-pass step on the smooth region (:mod:`meshrepair.denoise.lowpass`, round 9s)."""
 
 from __future__ import annotations
 
@@ -7,9 +7,9 @@ import pytest
 import trimesh
 
 from meshrepair import add_noise, denoise, msae
-from meshrepair import lowpass as lp
 from meshrepair.baselines import taubin_smooth
-from meshrepair.topology import edge_topology
+from meshrepair.denoise import lowpass as lp
+from meshrepair.mesh.topology import edge_topology
 
 from .conftest import shared_mesh
 
@@ -95,10 +95,11 @@ def test_rules():
 @pytest.mark.shared
 def test_spot_smooth_region_better_with_the_step(monkeypatch):
     """spot γ0.3 normal (docs/comparison.md's row, seed 1): measured 138.3 -> 100.3. Round
-    11c's longer low-pass (:mod:`meshrepair.coarse`), which fires on this row after this step
+    11c's longer low-pass (:mod:`meshrepair.denoise.coarse`), which fires on this row after this
+    step
     and takes most of its effect (57.8 with this step, 60.3 without), is switched off: this test
     measures round 9s."""
-    from meshrepair import coarse as _co
+    from meshrepair.denoise import coarse as _co
 
     monkeypatch.setattr(_co, "COARSE", False)
     V, F = shared_mesh("spot.ply")

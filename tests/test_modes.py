@@ -1,4 +1,5 @@
-"""Tests of the crease sharpening for correlated noise (meshrepair.modes): its maths and effect."""
+"""Tests of the crease sharpening for correlated noise (meshrepair.denoise.modes): its maths and
+effect."""
 
 import importlib
 
@@ -8,8 +9,7 @@ import trimesh
 
 from meshrepair import mean_angle_error, msae, vertex_error
 from meshrepair._kernels import modes as km
-from meshrepair.geometry import face_normals
-from meshrepair.modes import (
+from meshrepair.denoise.modes import (
     MODE_ETA,
     _face_adjacency,
     _normals_areas,
@@ -17,12 +17,13 @@ from meshrepair.modes import (
     sharpen,
     supported_by_data,
 )
+from meshrepair.mesh.geometry import face_normals
+from meshrepair.mesh.topology import edge_topology
 from meshrepair.synthetic import grid_plane
-from meshrepair.topology import edge_topology
 
 from .conftest import published_triple
 
-rules_mod = importlib.import_module("meshrepair.denoise_rules")
+rules_mod = importlib.import_module("meshrepair.denoise.rules")
 
 
 def _grid(n):
@@ -222,7 +223,7 @@ def test_quality_published_kinect_sharpened_creases():
     r = denoise(Vn, F)
     assert r.params["sharpened"] > 0.2
     # round 11k: the decision is clear of its thresholds (measured ρ 0.500, φ 0.58)
-    from meshrepair.modes import MODE_FLAT_SHARE, MODE_RHO_FLAT
+    from meshrepair.denoise.modes import MODE_FLAT_SHARE, MODE_RHO_FLAT
 
     assert r.params["sharpen_rho"] > MODE_RHO_FLAT + 0.2
     assert r.params["sharpen_flat"] > MODE_FLAT_SHARE + 0.1

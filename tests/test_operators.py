@@ -3,7 +3,7 @@ import pytest
 import scipy.sparse as sp
 import trimesh
 
-from meshrepair.geometry import (
+from meshrepair.mesh.geometry import (
     dihedral_angles,
     edge_lengths,
     face_normals,
@@ -11,15 +11,15 @@ from meshrepair.geometry import (
     mean_edge_length,
     sharp_edge_mask,
 )
-from meshrepair.linear import block_pcg, direct_solve
-from meshrepair.operators import (
+from meshrepair.mesh.operators import (
     apply_gradient,
     apply_gradient_transpose,
     edge_willmore_energy,
     gradient_operator,
     normal_system_matrix,
 )
-from meshrepair.topology import boundary_loops, edge_topology
+from meshrepair.mesh.topology import boundary_loops, edge_topology
+from meshrepair.model.linear import block_pcg, direct_solve
 
 
 def test_edge_topology_cube():

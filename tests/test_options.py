@@ -10,14 +10,14 @@ import trimesh
 
 import meshrepair as mr
 from meshrepair.cli import main
-from meshrepair.complete import complete
+from meshrepair.complete.api import complete
 from meshrepair.errors import MeshRepairError
 from meshrepair.io import write_mesh
 from meshrepair.metrics import distances, msae, point_to_surface, vertex_error
-from meshrepair.noise import add_noise
+from meshrepair.model.noise import add_noise
+from meshrepair.model.solver import ADMMSolver, SolverOptions, Stage
 from meshrepair.options import check_bool, check_choice, check_int, check_number
 from meshrepair.render import render_mesh
-from meshrepair.solver import ADMMSolver, SolverOptions, Stage
 
 NAN, INF = float("nan"), float("inf")
 

@@ -1,4 +1,5 @@
-"""Tests of the organic finish (meshrepair.organic, issue 12 round 9): its maths and its effect."""
+"""Tests of the organic finish (meshrepair.denoise.organic, issue 12 round 9): its maths and its
+effect."""
 
 import importlib
 
@@ -7,15 +8,15 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 from meshrepair import mean_angle_error, msae, vertex_error
-from meshrepair.geometry import face_normals, vertex_normals
-from meshrepair.organic import guidance_filter, reintegrate, reintegration_start
+from meshrepair.denoise.organic import guidance_filter, reintegrate, reintegration_start
+from meshrepair.mesh.geometry import face_normals, vertex_normals
+from meshrepair.mesh.topology import edge_topology
 from meshrepair.synthetic import grid_plane
-from meshrepair.topology import edge_topology
 
 from .conftest import needs_meshes, published_triple
 
-denoise_mod = importlib.import_module("meshrepair.denoise")
-rules_mod = importlib.import_module("meshrepair.denoise_rules")
+denoise_mod = importlib.import_module("meshrepair.denoise.api")
+rules_mod = importlib.import_module("meshrepair.denoise.rules")
 
 
 def _plane(n=12):
@@ -30,7 +31,7 @@ def _sphere(subdiv=3):
 
 
 def _sun_energy(X, F, Nt):
-    """E(x) = Σ_f Σ_{i∈f} ⟨n*_f, x_i − c_f⟩² (module docstring of meshrepair.organic)."""
+    """E(x) = Σ_f Σ_{i∈f} ⟨n*_f, x_i − c_f⟩² (module docstring of meshrepair.denoise.organic)."""
     C = X[F].mean(axis=1)
     return float(sum(np.sum(np.einsum("ij,ij->i", Nt, X[F[:, k]] - C) ** 2) for k in range(3)))
 

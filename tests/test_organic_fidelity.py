@@ -1,4 +1,5 @@
-"""The data weight of smooth organic meshes at low noise (:mod:`meshrepair.organic_fidelity`,
+"""The data weight of smooth organic meshes at low noise
+(:mod:`meshrepair.denoise.organic_fidelity`,
 round 10l)."""
 
 from __future__ import annotations
@@ -8,8 +9,8 @@ import pytest
 import trimesh
 
 from meshrepair import add_noise, denoise, msae
-from meshrepair import organic_fidelity as of
-from meshrepair.denoise_rules import CAD_SUPPORT, TANGENTIAL_MAX, lambda_from_noise
+from meshrepair.denoise import organic_fidelity as of
+from meshrepair.denoise.rules import CAD_SUPPORT, TANGENTIAL_MAX, lambda_from_noise
 
 from .conftest import shared_mesh
 

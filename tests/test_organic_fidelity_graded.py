@@ -1,5 +1,5 @@
 """The data weight graded by the tangential ratio of the noise (round 11n,
-:func:`meshrepair.organic_fidelity.tangential_gain`)."""
+:func:`meshrepair.denoise.organic_fidelity.tangential_gain`)."""
 
 from __future__ import annotations
 
@@ -7,9 +7,9 @@ import numpy as np
 import pytest
 
 from meshrepair import add_noise, denoise, msae
-from meshrepair import organic_fidelity as of
-from meshrepair.denoise_rules import TANGENTIAL_MAX
-from meshrepair.scale import tangential_ratio
+from meshrepair.denoise import organic_fidelity as of
+from meshrepair.denoise.rules import TANGENTIAL_MAX
+from meshrepair.denoise.scale import tangential_ratio
 from meshrepair.synthetic import grid_plane
 
 from .conftest import shared_mesh

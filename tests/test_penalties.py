@@ -2,7 +2,7 @@ import numpy as np
 import pytest
 from scipy.optimize import minimize
 
-from meshrepair.penalties import beta1_rule, mc_penalty, prox_mc, t_objective, t_update
+from meshrepair.model.penalties import beta1_rule, mc_penalty, prox_mc, t_objective, t_update
 
 
 def test_mc_penalty_values():

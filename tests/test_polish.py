@@ -1,4 +1,4 @@
-"""Tests of the heavy-noise polish (meshrepair.polish): its maths and its effect."""
+"""Tests of the heavy-noise polish (meshrepair.denoise.polish): its maths and its effect."""
 
 import importlib
 
@@ -8,8 +8,7 @@ import trimesh
 
 from meshrepair import add_noise, denoise, mean_angle_error, msae
 from meshrepair._kernels import bilateral as kb
-from meshrepair.geometry import face_normals
-from meshrepair.polish import (
+from meshrepair.denoise.polish import (
     _neighbourhood,
     _neighbourhood_csr,
     filter_normals,
@@ -17,13 +16,14 @@ from meshrepair.polish import (
     polish,
     vertex_update,
 )
+from meshrepair.mesh.geometry import face_normals
+from meshrepair.mesh.topology import edge_topology
 from meshrepair.synthetic import grid_plane
-from meshrepair.topology import edge_topology
 
 from .conftest import published_triple
 
-denoise_mod = importlib.import_module("meshrepair.denoise")
-rules_mod = importlib.import_module("meshrepair.denoise_rules")
+denoise_mod = importlib.import_module("meshrepair.denoise.api")
+rules_mod = importlib.import_module("meshrepair.denoise.rules")
 
 
 def _plane(n=14):
@@ -143,7 +143,7 @@ def test_kernels_match_numpy_twins():
 
 def test_neighbourhood_chunks(monkeypatch):
     """Building K in chunks of rows gives the same matrix as in one piece."""
-    pm = importlib.import_module("meshrepair.polish")
+    pm = importlib.import_module("meshrepair.denoise.polish")
     V, F = _fold(12)
     topo = edge_topology(F, len(V))
     sharp = _crease_mask(V, F, topo)

@@ -1,4 +1,4 @@
-"""Round 9b: the polish's vertex step keeps the data term (meshrepair.polish_fidelity)."""
+"""Round 9b: the polish's vertex step keeps the data term (meshrepair.denoise.polish_fidelity)."""
 
 import importlib
 
@@ -7,20 +7,20 @@ import pytest
 import trimesh
 
 from meshrepair import add_noise, denoise, mean_angle_error, msae, vertex_error
-from meshrepair.geometry import face_normals
-from meshrepair.polish import polish, vertex_update
-from meshrepair.polish_fidelity import (
+from meshrepair.denoise.polish import polish, vertex_update
+from meshrepair.denoise.polish_fidelity import (
     data_prox,
     polish_energy,
     vertex_update_with_data,
 )
+from meshrepair.mesh.geometry import face_normals
+from meshrepair.mesh.topology import edge_topology
 from meshrepair.synthetic import grid_plane
-from meshrepair.topology import edge_topology
 
 from .conftest import published_triple
 
-denoise_mod = importlib.import_module("meshrepair.denoise")
-finish_mod = importlib.import_module("meshrepair.denoise_finish")
+denoise_mod = importlib.import_module("meshrepair.denoise.api")
+finish_mod = importlib.import_module("meshrepair.denoise.finish")
 
 
 def _plane(n=12):
@@ -46,7 +46,7 @@ def test_data_prox_is_the_argmin():
 
 
 def test_zero_eta_is_the_plain_vertex_update():
-    """η = 0 gives exactly the Sun steps of meshrepair.polish."""
+    """η = 0 gives exactly the Sun steps of meshrepair.denoise.polish."""
     V, F = _plane()
     rng = np.random.default_rng(1)
     X = V + 0.05 * rng.normal(size=V.shape)
@@ -155,7 +155,8 @@ def test_polish_data_term_on_the_reordered_path(monkeypatch):
     V, F = np.asarray(box.vertices, float), np.asarray(box.faces, np.int64)
     Vn = add_noise(V, F, 0.6, seed=3)
     r = denoise(Vn, F)
-    monkeypatch.setattr(importlib.import_module("meshrepair.denoise_run"), "REORDER_MIN_VERTICES",
+    monkeypatch.setattr(importlib.import_module("meshrepair.denoise.analysis"),
+                        "REORDER_MIN_VERTICES",
                         0)
     r2 = denoise(Vn, F)
     assert r2.params["reordered"] and r2.params["polished"] > 0

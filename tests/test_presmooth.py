@@ -1,5 +1,5 @@
 """Heavy noise on organic meshes: the low-pass of the input before the solve
-(:mod:`meshrepair.presmooth`, round 10h)."""
+(:mod:`meshrepair.denoise.presmooth`, round 10h)."""
 
 from __future__ import annotations
 
@@ -8,8 +8,8 @@ import pytest
 import trimesh
 
 from meshrepair import add_noise, denoise, msae
-from meshrepair import lowpass as lp
-from meshrepair import presmooth as ps
+from meshrepair.denoise import lowpass as lp
+from meshrepair.denoise import presmooth as ps
 
 from .conftest import shared_mesh
 

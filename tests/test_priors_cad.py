@@ -1,5 +1,5 @@
 """Maths of the CAD-part rules of issue 12 (round 4): per-edge Willmore weights outside the
-crease-supported region (:func:`meshrepair.denoise.outside_weight`)."""
+crease-supported region (:func:`meshrepair.denoise.api.outside_weight`)."""
 
 import importlib
 
@@ -9,14 +9,14 @@ import trimesh
 from scipy.optimize import minimize
 
 from meshrepair import add_noise, denoise, mean_angle_error, msae
-from meshrepair.priors import reg_energy_mixed, t_update_mixed
-from meshrepair.solver import ADMMSolver, SolverOptions, Stage
+from meshrepair.model.priors import reg_energy_mixed, t_update_mixed
+from meshrepair.model.solver import ADMMSolver, SolverOptions, Stage
 from meshrepair.synthetic import grid_plane
 
 from .conftest import published_triple
 
-denoise_mod = importlib.import_module("meshrepair.denoise")
-rules_mod = importlib.import_module("meshrepair.denoise_rules")
+denoise_mod = importlib.import_module("meshrepair.denoise.api")
+rules_mod = importlib.import_module("meshrepair.denoise.rules")
 
 
 @pytest.mark.parametrize("with_flat", [False, True])
@@ -57,8 +57,8 @@ def _plane(n=12):
 def test_solver_energy_with_per_edge_weights():
     """The energy the solver reports with per-edge weights is (6) with those weights, computed
     independently from the final vertices; weights equal to the scalar option change nothing."""
-    from meshrepair.geometry import face_normals
-    from meshrepair.topology import edge_topology
+    from meshrepair.mesh.geometry import face_normals
+    from meshrepair.mesh.topology import edge_topology
 
     V, F = _plane()
     rng = np.random.default_rng(2)
@@ -146,8 +146,8 @@ def test_more_inner_steps_follow_long_waves():
     Kinect scan's scale), the default two stages with the Kinect's weights (w = 16, λ = 0.17):
     6 V-steps per iteration leave flatter faces than 3 in the same ADMM iterations (measured
     mean normal error 3.56° → 2.63°; the noisy input has 23.5°)."""
-    from meshrepair.geometry import face_normals
-    from meshrepair.scale import correlated_noise
+    from meshrepair.denoise.scale import correlated_noise
+    from meshrepair.mesh.geometry import face_normals
 
     V, F = _plane(30)
     V0 = correlated_noise(V, F, 0.4, 2, seed=1)

@@ -28,9 +28,9 @@ import meshrepair as mr
 from meshrepair.cli import main
 from meshrepair.errors import MeshRepairError
 from meshrepair.io import read_mesh, read_vertex_mask, write_mesh
+from meshrepair.mesh.validate import check_mesh
 from meshrepair.metrics import distances
-from meshrepair.noise import add_noise
-from meshrepair.validate import check_mesh
+from meshrepair.model.noise import add_noise
 
 settings.register_profile("default", max_examples=60, deadline=None, derandomize=True,
                           database=None, print_blob=True,

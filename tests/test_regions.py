@@ -1,10 +1,10 @@
-"""Crease-support statistics of :mod:`meshrepair.regions` on synthetic folds (issue 12, round 7)."""
+"""Crease-support statistics of :mod:`meshrepair.denoise.regions` on synthetic folds (issue 12,
+round 7)."""
 
 import numpy as np
 import pytest
 
-from meshrepair.geometry import face_normals
-from meshrepair.regions import (
+from meshrepair.denoise.regions import (
     LONG_CHAIN,
     chain_statistics,
     crease_support,
@@ -12,7 +12,8 @@ from meshrepair.regions import (
     long_chains,
     supported_chains,
 )
-from meshrepair.topology import edge_topology
+from meshrepair.mesh.geometry import face_normals
+from meshrepair.mesh.topology import edge_topology
 
 
 def _strip(f, nx=20, ny=40, h=0.1):

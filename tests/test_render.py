@@ -9,8 +9,8 @@ import pytest
 import trimesh
 
 from meshrepair.errors import MeshRepairError
+from meshrepair.mesh.topology import edge_topology
 from meshrepair.render import compare_figure, render_mesh, render_to_file, save_png
-from meshrepair.topology import edge_topology
 
 WHITE = 250  # a pixel with all channels >= WHITE counts as background
 
@@ -383,7 +383,7 @@ def blue_pixels(img: np.ndarray) -> np.ndarray:
 
 
 def test_look_at_frames_the_region_so_it_fills_most_of_the_image():
-    from meshrepair.framing import frame_vertices
+    from meshrepair.render.framing import frame_vertices
 
     V, F, patch = grid_with_patch()
     kw = dict(region_mask=patch, color_by="none", width=160, height=120, colorbar=False)

@@ -13,8 +13,8 @@ import pytest
 import trimesh
 
 from meshrepair.errors import MeshRepairError
-from meshrepair.report import convergence_plot, write_report
-from meshrepair.topology import edge_topology
+from meshrepair.mesh.topology import edge_topology
+from meshrepair.report.page import convergence_plot, write_report
 
 PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
 DATA_PNG = "data:image/png;base64,"

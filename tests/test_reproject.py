@@ -1,9 +1,10 @@
-"""Tangential re-anchoring (meshrepair.reproject): closest points, blend weights, the gate."""
+"""Tangential re-anchoring (meshrepair.denoise.reproject): closest points, blend weights, the
+gate."""
 
 import numpy as np
 import pytest
 
-from meshrepair.reproject import (
+from meshrepair.denoise.reproject import (
     blend_weights,
     closest_point_triangles,
     closest_points_local,
@@ -144,7 +145,7 @@ def test_blend_weights_formula_and_inactive():
 
 
 def test_reanchor_keeps_the_border_and_inactive_vertices():
-    from meshrepair.topology import edge_topology
+    from meshrepair.mesh.topology import edge_topology
 
     V, F = _grid(8)
     V0 = V + np.r_[0.2, 0.1, 0.3]
@@ -205,8 +206,8 @@ def test_denoise_reanchor_organic_ev():
 def test_reanchor_never_turns_a_face_over():
     """A data vertex 1.5 edges away along the plane: its exact projection would carry the
     vertex over its neighbours; the vertices of the faces it would reverse keep their place."""
-    from meshrepair.relax import locally_flipped_faces
-    from meshrepair.topology import edge_topology
+    from meshrepair.mesh.topology import edge_topology
+    from meshrepair.model.relax import locally_flipped_faces
 
     V, F = _grid(8)
     topo = edge_topology(F, len(V))
@@ -227,7 +228,7 @@ def test_reanchor_never_turns_a_face_over():
 
 
 def _umbrella_rows(F, nV, c):
-    from meshrepair.topology import edge_topology
+    from meshrepair.mesh.topology import edge_topology
 
     e = edge_topology(F, nV).edges
     A = np.zeros((nV, nV))

@@ -1,11 +1,11 @@
-"""The model profiles of meshrepair.scale walk one chain W^n Z; they equal the definition
+"""The model profiles of meshrepair.denoise.scale walk one chain W^n Z; they equal the definition
 ``c_k(m) = MAD-std((W^m Z - W^k W^m Z)[ok])``, ``σ_m = rms(W^m Z [ok])`` bit for bit."""
 
 import numpy as np
 import trimesh
 
-from meshrepair import scale as S
-from meshrepair.topology import edge_topology
+from meshrepair.denoise import scale as S
+from meshrepair.mesh.topology import edge_topology
 
 
 def _reference(W, ks, ok, n_samples=20_000, seed=0):

@@ -1,4 +1,4 @@
-"""Round 11r: the probe's stopping rule in mean-edge-length units (meshrepair.scalefree)."""
+"""Round 11r: the probe's stopping rule in mean-edge-length units (meshrepair.denoise.scalefree)."""
 
 from pathlib import Path
 
@@ -7,9 +7,9 @@ import pytest
 import trimesh
 import trimesh.remesh
 
-from meshrepair import _fused
-from meshrepair.geometry import mean_edge_length
-from meshrepair.scalefree import Q_REF, radius_in_edges, tolerance_factor
+import meshrepair.model._fused as _fused
+from meshrepair.denoise.scalefree import Q_REF, radius_in_edges, tolerance_factor
+from meshrepair.mesh.geometry import mean_edge_length
 
 
 def _sphere(sub=2):
@@ -78,8 +78,8 @@ def _box(k):
 
 
 def _probe_support(V, F, N):
-    from meshrepair.regions import crease_support
-    from meshrepair.topology import edge_topology
+    from meshrepair.denoise.regions import crease_support
+    from meshrepair.mesh.topology import edge_topology
 
     topo = edge_topology(F, len(V))
     return topo, crease_support(topo, N)
@@ -89,8 +89,8 @@ def test_cad_support_of_a_box_does_not_depend_on_its_resolution():
     """f ∝ 1/q for a crease network, f_ref = max(f, f_g q / Q_c) does not: the box's exact
     normals, subdivided 5 and 6 times (q ≈ 18 and 36), give the same f q within 10 %, and the
     finer one, whose raw f is below 0.2, reads f_ref = f q / Q_c ≥ 0.2."""
-    from meshrepair.geometry import face_normals
-    from meshrepair.scalefree import Q_CAD, cad_support, crease_like_share
+    from meshrepair.denoise.scalefree import Q_CAD, cad_support, crease_like_share
+    from meshrepair.mesh.geometry import face_normals
 
     out = []
     for k in (5, 6):
@@ -112,8 +112,8 @@ def test_cad_support_of_a_box_does_not_depend_on_its_resolution():
 def test_noise_creases_on_a_sphere_are_not_crease_like():
     """Jittered normals (25° rms) on a smooth sphere make long chains of creased edges; their
     sides are not flat (s > 5.5°), so none counts: f_ref = f."""
-    from meshrepair.geometry import face_normals
-    from meshrepair.scalefree import cad_support, crease_like_share
+    from meshrepair.denoise.scalefree import cad_support, crease_like_share
+    from meshrepair.mesh.geometry import face_normals
 
     m = trimesh.creation.icosphere(subdivisions=5)
     V, F = np.asarray(m.vertices, float), np.asarray(m.faces, np.int64)
@@ -162,7 +162,7 @@ def test_willmore_extra_kernel_matches_its_numpy_twin():
 def test_two_phase_gate_reads_q_and_the_switches(monkeypatch):
     """Round 11s: two phases only above Q_0 with rule 1 and the gate on; the second phase only
     when the first reads a non-empty crease-supported region."""
-    import meshrepair.scalefree as sf
+    from meshrepair.denoise import scalefree as sf
 
     assert not sf.two_phase(Q_REF) and not sf.two_phase(0.5 * Q_REF)
     assert sf.two_phase(Q_REF * 1.01) and sf.two_phase(10 * Q_REF)
@@ -175,7 +175,7 @@ def test_two_phase_gate_reads_q_and_the_switches(monkeypatch):
 
 
 def _recording_solver():
-    from meshrepair.solver import ADMMSolver
+    from meshrepair.model.solver import ADMMSolver
 
     calls = []
 
@@ -200,10 +200,10 @@ def test_gated_probe_phases_tolerances_and_iterations(shape):
     """Phase 1 stops at the relative tolerance switch_tol; a box (creases) goes on, resuming
     phase 1's run, with the scale-free tolerance for the iterations left; a smooth sphere (no
     crease-supported edge) stops after phase 1. The iterations add up."""
-    from meshrepair.denoise_run import default_stages
-    from meshrepair.scalefree import gated_probe, probe_tol
-    from meshrepair.solver import SolverOptions
-    from meshrepair.topology import edge_topology
+    from meshrepair.denoise.run import default_stages
+    from meshrepair.denoise.scalefree import gated_probe, probe_tol
+    from meshrepair.mesh.topology import edge_topology
+    from meshrepair.model.solver import SolverOptions
 
     if shape == "box":
         V, F = _box(3)
@@ -234,7 +234,7 @@ def test_gated_probe_phases_tolerances_and_iterations(shape):
     else:
         assert r.probe_phases == 1 and r.probe_gate_support == 0.0 and len(calls) == 1
         # the gate's read is handed on, equal to reading the result's normals again
-        from meshrepair.crease_network import supported
+        from meshrepair.denoise.crease_network import supported
 
         sup, net = supported(topo, r.N, th=30.0)
         np.testing.assert_array_equal(r.crease_support[0], sup)

@@ -1,11 +1,11 @@
-"""meshrepair._select.median is np.median's value exactly (one selection instead of numpy's
-two-index partition), and the MAD of meshrepair.scale built on it too."""
+"""meshrepair._kernels.select.median is np.median's value exactly (one selection instead of numpy's
+two-index partition), and the MAD of meshrepair.denoise.scale built on it too."""
 
 import numpy as np
 import pytest
 
-from meshrepair._select import median, median_inplace
-from meshrepair.scale import _mad_std
+from meshrepair._kernels.select import median, median_inplace
+from meshrepair.denoise.scale import _mad_std
 
 
 @pytest.mark.parametrize("n", [1, 2, 3, 4, 5, 8, 9, 100, 101, 4610, 23050, 23051])

@@ -1,4 +1,5 @@
-"""The decision of the crease sharpening (meshrepair.sharpen_decision, issue 12 round 11k)."""
+"""The decision of the crease sharpening (meshrepair.denoise.sharpen_decision, issue 12 round
+11k)."""
 
 import importlib
 
@@ -7,15 +8,15 @@ import pytest
 import trimesh
 
 from meshrepair import denoise, msae
-from meshrepair.modes import MODE_FLAT_SHARE, MODE_RHO_FLAT, supported_by_data
-from meshrepair.scale import correlated_noise
-from meshrepair.sharpen_decision import flat_vertices, set_statistics
+from meshrepair.denoise.modes import MODE_FLAT_SHARE, MODE_RHO_FLAT, supported_by_data
+from meshrepair.denoise.scale import correlated_noise
+from meshrepair.denoise.sharpen_decision import flat_vertices, set_statistics
+from meshrepair.mesh.topology import edge_topology
 from meshrepair.synthetic import grid_plane
-from meshrepair.topology import edge_topology
 
 from .test_modes import _fold
 
-rules_mod = importlib.import_module("meshrepair.denoise_rules")
+rules_mod = importlib.import_module("meshrepair.denoise.rules")
 
 
 def _segment_case(t, n=12, seed=0):

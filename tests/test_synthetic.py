@@ -5,6 +5,7 @@ import pytest
 import trimesh
 
 from meshrepair.errors import MeshRepairError
+from meshrepair.mesh.topology import boundary_loops
 from meshrepair.synthetic import (
     DAMAGES,
     damage_region,
@@ -13,7 +14,6 @@ from meshrepair.synthetic import (
     random_rigid,
     symmetrize,
 )
-from meshrepair.topology import boundary_loops
 
 from .conftest import grid
 

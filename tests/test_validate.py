@@ -1,4 +1,4 @@
-"""Tests of meshrepair.validate.check_mesh: every refusal, every warning, the report."""
+"""Tests of meshrepair.mesh.validate.check_mesh: every refusal, every warning, the report."""
 
 from __future__ import annotations
 
@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from meshrepair.errors import MeshRepairError
-from meshrepair.validate import MeshReport, check_mesh
+from meshrepair.mesh.validate import MeshReport, check_mesh
 
 from .conftest import SHARED, needs_meshes
 
@@ -170,7 +170,7 @@ def test_zero_area_faces_refused_or_warned(caplog):
                        r"\[.*\].*allow_degenerate=True"):
         check_mesh(V2, F)
     n_expected = int(np.sum([np.isin(15, f) and np.isin(14, f) for f in F]))
-    with caplog.at_level(logging.WARNING, logger="meshrepair.validate"):
+    with caplog.at_level(logging.WARNING, logger="meshrepair.mesh.validate"):
         r = check_mesh(V2, F, allow_degenerate=True)
     assert r.n_degenerate_faces == n_expected == 1
     assert "zero-area" in caplog.text and "allow_degenerate=True" in caplog.text
@@ -214,7 +214,7 @@ def test_duplicate_vertices_warned_and_kept(caplog):
     V = np.r_[V, V[[1]], [[-0.0, 0.0, 0.0]]]  # 4 duplicates 1, 5 duplicates 0 (-0.0 == 0.0)
     F = np.r_[F, [[4, 5, 2]]]
     F[0] = [0, 2, 1]
-    with caplog.at_level(logging.WARNING, logger="meshrepair.validate"):
+    with caplog.at_level(logging.WARNING, logger="meshrepair.mesh.validate"):
         r = check_mesh(V, F)
     assert r.n_duplicate_vertices == 2
     assert r.n_vertices == 6
@@ -224,7 +224,7 @@ def test_duplicate_vertices_warned_and_kept(caplog):
 def test_unreferenced_vertices_warned(caplog):
     V, F = tetra()
     V = np.r_[V, [[5.0, 5, 5], [6, 6, 6]]]
-    with caplog.at_level(logging.WARNING, logger="meshrepair.validate"):
+    with caplog.at_level(logging.WARNING, logger="meshrepair.mesh.validate"):
         r = check_mesh(V, F)
     assert r.n_unreferenced == 2
     assert r.n_components == 1  # unreferenced vertices are not components
@@ -235,7 +235,7 @@ def test_pinched_boundary_vertex_warned(caplog):
     # bow tie: two triangles touching at vertex 0
     V = np.array([[0.0, 0, 0], [1, 0, 0], [1, 1, 0], [-1, 0, 0], [-1, -1, 0]])
     F = np.array([[0, 1, 2], [0, 3, 4]])
-    with caplog.at_level(logging.WARNING, logger="meshrepair.validate"):
+    with caplog.at_level(logging.WARNING, logger="meshrepair.mesh.validate"):
         r = check_mesh(V, F)
     assert r.n_pinched_vertices == 1
     assert r.n_boundary_loops == 1  # the two loops share vertex 0
@@ -251,7 +251,7 @@ def test_pinched_interior_vertex_two_closed_fans(caplog):
     F2[F1 > 0] += 3
     F2 = F2[:, ::-1]  # mirrored copy: flip to keep outward orientation consistent
     F = np.r_[F1, F2]
-    with caplog.at_level(logging.WARNING, logger="meshrepair.validate"):
+    with caplog.at_level(logging.WARNING, logger="meshrepair.mesh.validate"):
         r = check_mesh(V, F)
     assert r.is_closed
     assert r.n_pinched_vertices == 1
@@ -262,7 +262,7 @@ def test_components_counted_and_logged(caplog):
     V, F = tetra()
     V2 = np.r_[V, V + 10]
     F2 = np.r_[F, F + 4]
-    with caplog.at_level(logging.INFO, logger="meshrepair.validate"):
+    with caplog.at_level(logging.INFO, logger="meshrepair.mesh.validate"):
         r = check_mesh(V2, F2)
     assert r.n_components == 2
     assert "2 connected components" in caplog.text
@@ -279,7 +279,7 @@ def test_real_meshes_match_manifest(caplog):
     from meshrepair.io import read_mesh
 
     m = read_mesh(MESHES / "kinect_pyramid.ply")
-    with caplog.at_level(logging.WARNING, logger="meshrepair.validate"):
+    with caplog.at_level(logging.WARNING, logger="meshrepair.mesh.validate"):
         r = check_mesh(m.V, m.F, name="kinect_pyramid")
     assert (r.n_vertices, r.n_faces) == (6627, 12559)
     assert r.n_boundary_loops == 14 and r.n_pinched_vertices == 8  # MANIFEST.md

@@ -1,4 +1,4 @@
-"""Tests of meshrepair.viewer (page content, packing, decimation), meshrepair.framing and the
+"""Tests of meshrepair.viewer (page content, packing, decimation), meshrepair.render.framing and the
 ``view`` command, without a browser (the browser tests are in test_viewer_browser.py)."""
 
 from __future__ import annotations
@@ -13,7 +13,7 @@ import pytest
 import trimesh
 
 from meshrepair.errors import MeshRepairError
-from meshrepair.framing import frame_faces, frame_hole, frame_loop, view_axes
+from meshrepair.render.framing import frame_faces, frame_hole, frame_loop, view_axes
 from meshrepair.viewer import ViewerMesh, cluster_decimate, viewer_section, write_viewer
 from meshrepair.viewer.content import hole_outcome, mesh_pane, mesh_regions
 
@@ -214,7 +214,7 @@ def test_cli_view(tmp_path, capsys):
 
 def test_complete_and_inpaint_reports_highlight_their_faces(tmp_path):
     from meshrepair.cli import main
-    from meshrepair.complete import extract_patch
+    from meshrepair.complete.api import extract_patch
     from meshrepair.io import write_mesh
 
     s = trimesh.creation.icosphere(subdivisions=3)

@@ -1,5 +1,5 @@
 """The main run of denoise starts from the robust probe's result for impulsive noise on a CAD
-part (meshrepair.denoise_rules.warm_start_from_probe)."""
+part (meshrepair.denoise.rules.warm_start_from_probe)."""
 
 import importlib
 
@@ -7,9 +7,9 @@ import numpy as np
 import trimesh
 
 from meshrepair import denoise, msae
-from meshrepair.geometry import mean_edge_length, vertex_normals
+from meshrepair.mesh.geometry import mean_edge_length, vertex_normals
 
-rules_mod = importlib.import_module("meshrepair.denoise_rules")
+rules_mod = importlib.import_module("meshrepair.denoise.rules")
 
 
 def test_warm_start_rule():

@@ -8,6 +8,7 @@ Public API::
     r = fill_holes(V, F)       # closes holes; r.holes is a per-hole report
     r = inpaint(V, F, region)  # removes a damaged region and refills it
     r = complete(V, F, faces, (V_P, F_P))   # grafts a template patch and blends it
+    out = carry_attributes(read_mesh(p), r)  # the file's colours, UVs, materials on the result
 """
 
 import sys as _sys
@@ -17,17 +18,18 @@ import types as _types
 # CLI's start-up, ``meshrepair --version``) does not load numba, scipy.sparse and every task;
 # ``from meshrepair import X`` works for every name of ``__all__`` as before.
 _LAZY = {
-    "ADMMSolver": "solver", "SolverOptions": "solver", "SolverResult": "solver",
-    "Stage": "solver", "StopRequested": "solver",
-    "CompletionResult": "complete", "complete": "complete",
-    "DenoiseResult": "denoise", "denoise": "denoise",
+    "ADMMSolver": "model.solver", "SolverOptions": "model.solver",
+    "SolverResult": "model.solver", "Stage": "model.solver", "StopRequested": "model.solver",
+    "CompletionResult": "complete.result", "complete": "complete.api",
+    "DenoiseResult": "denoise.result", "denoise": "denoise.api",
+    "plan_denoise": "denoise.api", "DenoisePlan": "denoise.plan",
     "MeshRepairError": "errors",
     "FillResult": "fill", "fill_holes": "fill", "inpaint": "fill",
     "find_holes": "holes",
-    "read_mesh": "io", "write_mesh": "io",
+    "read_mesh": "io", "write_mesh": "io", "carry_attributes": "io", "write_like_input": "io",
     "distances": "metrics", "msae": "metrics", "mean_angle_error": "metrics",
     "vertex_error": "metrics",
-    "add_noise": "noise", "estimate_noise": "noise",
+    "add_noise": "model.noise", "estimate_noise": "model.noise",
 }
 
 
@@ -59,6 +61,56 @@ class _Package(_types.ModuleType):
 
 _sys.modules[__name__].__class__ = _Package
 
+# Modules that moved into the package's wings: their old paths keep importing the same module
+# object, with a DeprecationWarning naming the new path, until version 0.2.
+_MOVED = {
+    "solver": "model.solver", "penalties": "model.penalties", "inner": "model.inner",
+    "linear": "model.linear", "priors": "model.priors", "fidelity": "model.fidelity",
+    "noise": "model.noise", "relax": "model.relax", "operators": "mesh.operators",
+    "geometry": "mesh.geometry", "topology": "mesh.topology", "validate": "mesh.validate",
+    "array_contract": "mesh.array_contract", "framing": "render.framing",
+}
+
+
+class _MovedModules:
+    """A meta-path finder and loader for the old paths of :data:`_MOVED`: ``import
+    meshrepair.penalties`` returns ``meshrepair.model.penalties`` itself (one module object,
+    so a monkeypatch or an ``isinstance`` check through either name sees the same thing)."""
+
+    @staticmethod
+    def _new(fullname: str) -> str | None:
+        head, _, rest = fullname.partition(".")
+        if head != __name__ or not rest:
+            return None
+        top, _, sub = rest.partition(".")
+        new = _MOVED.get(top)
+        return None if new is None else f"{__name__}.{new}" + (f".{sub}" if sub else "")
+
+    def find_spec(self, fullname, path=None, target=None):
+        if self._new(fullname) is None:
+            return None
+        import importlib.util
+
+        return importlib.util.spec_from_loader(fullname, self)
+
+    def create_module(self, spec):
+        import importlib
+        import warnings
+
+        new = self._new(spec.name)
+        warnings.warn(f"{spec.name} has moved to {new}; the old path is kept until meshrepair "
+                      "0.2", DeprecationWarning, stacklevel=4)
+        module = importlib.import_module(new)
+        self._spec = module.__spec__
+        return module
+
+    def exec_module(self, module):
+        module.__spec__ = self._spec  # the import system set the old name's spec; undo it
+
+
+if not any(isinstance(f, _MovedModules) for f in _sys.meta_path):
+    _sys.meta_path.insert(0, _MovedModules())
+
 __all__ = [
     "ADMMSolver",
     "CompletionResult",
@@ -67,6 +119,7 @@ __all__ = [
     "fill_holes",
     "find_holes",
     "inpaint",
+    "DenoisePlan",
     "DenoiseResult",
     "MeshRepairError",
     "SolverOptions",
@@ -75,12 +128,15 @@ __all__ = [
     "StopRequested",
     "add_noise",
     "denoise",
+    "plan_denoise",
     "distances",
     "estimate_noise",
     "msae",
     "mean_angle_error",
     "read_mesh",
+    "carry_attributes",
     "vertex_error",
+    "write_like_input",
     "write_mesh",
 ]
 __version__ = "0.1.0"

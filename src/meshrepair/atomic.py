@@ -24,7 +24,7 @@ from contextlib import contextmanager
 from pathlib import Path
 from typing import IO, Any
 
-from .errors import MeshRepairError
+from meshrepair.errors import MeshRepairError
 
 __all__ = ["atomic_write", "check_writable", "write_json"]
 

@@ -12,9 +12,9 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
-from .geometry import face_normals_areas
-from .io import as_arrays
-from .topology import edge_topology
+from meshrepair.mesh.array_contract import as_arrays
+from meshrepair.mesh.geometry import face_normals_areas
+from meshrepair.mesh.topology import edge_topology
 
 
 def _umbrella(F: np.ndarray, nV: int) -> sp.csr_matrix:

@@ -8,8 +8,8 @@ import logging
 import os
 import sys
 
-from . import __version__
-from .errors import MeshRepairError
+from meshrepair import __version__
+from meshrepair.errors import MeshRepairError
 
 # sub-command modules in src/meshrepair/commands/, each with register(subparsers)
 COMMANDS = ("denoise", "fill", "complete", "render", "report", "view", "batch")
@@ -35,14 +35,14 @@ def build_parser() -> argparse.ArgumentParser:
                 continue
             raise
         mod.register(sub)
-    from .commands.parsing import document_defaults
+    from meshrepair.commands.parsing import document_defaults
 
     document_defaults(p)
     return p
 
 
 def main(argv: list[str] | None = None) -> int:
-    from .commands.parsing import normalise_argv
+    from meshrepair.commands.parsing import normalise_argv
 
     parser = build_parser()
     args = parser.parse_args(normalise_argv(parser, sys.argv[1:] if argv is None else argv))

@@ -5,8 +5,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from .errors import MeshRepairError
-from .geometry import face_normals
+from meshrepair.errors import MeshRepairError
+from meshrepair.mesh.geometry import face_normals
 
 
 def _same_shape(V: np.ndarray, V_ref: np.ndarray) -> None:
@@ -206,7 +206,7 @@ def distances(V: np.ndarray, F: np.ndarray, V_ref: np.ndarray, F_ref: np.ndarray
     dict with ``mean`` (symmetric mean), ``hausdorff`` (symmetric max), ``mean_to_ref``,
     ``max_to_ref``, and ``diag`` (bounding-box diagonal of the reference), all in input units.
     """
-    from .options import check_int
+    from meshrepair.options import check_int
 
     per_face = check_int("per_face", per_face, low=0, high=7)
     V, V_ref = _points(V, "V"), _points(V_ref, "V_ref")

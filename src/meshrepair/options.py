@@ -12,7 +12,7 @@ import numbers
 from collections.abc import Sequence
 from typing import Any
 
-from .errors import MeshRepairError
+from meshrepair.errors import MeshRepairError
 
 __all__ = ["check_bool", "check_choice", "check_int", "check_number"]
 

@@ -3,7 +3,8 @@ exactly mirror-symmetric meshes, a triangulated grid plane and thrown-vertex (im
 
 These build the cut-and-repair cases of the test suite and of ``benchmarks/completion.py`` (a
 region of a known mesh is damaged and repaired, and the result is compared with the original),
-in the spirit of :func:`meshrepair.noise.add_noise`. Distances on the surface are shortest paths
+in the spirit of :func:`meshrepair.model.noise.add_noise`. Distances on the surface are shortest
+paths
 in the edge graph weighted by edge length (Dijkstra), an upper bound of the geodesic distance.
 """
 
@@ -11,8 +12,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from .errors import MeshRepairError
-from .geometry import mean_edge_length, vertex_normals
+from meshrepair.errors import MeshRepairError
+from meshrepair.mesh.geometry import mean_edge_length, vertex_normals
 
 DAMAGES = ("dent", "spike", "noise", "flat")
 """The kinds of :func:`damage_region`."""
@@ -23,7 +24,7 @@ def edge_graph(V: np.ndarray, F: np.ndarray):
     (for ``scipy.sparse.csgraph``)."""
     import scipy.sparse as sp
 
-    from .topology import edge_topology
+    from meshrepair.mesh.topology import edge_topology
 
     e = edge_topology(F, len(V)).edges
     w = np.linalg.norm(V[e[:, 0]] - V[e[:, 1]], axis=1)
@@ -86,7 +87,7 @@ def damage_region(V: np.ndarray, F: np.ndarray, faces: np.ndarray, d: np.ndarray
         Distances from the region's centre (as returned by :func:`geodesic_disc`).
     kind : {"dent", "spike", "noise", "flat"}
     """
-    from .topology import boundary_loops
+    from meshrepair.mesh.topology import boundary_loops
 
     if kind not in DAMAGES:
         raise MeshRepairError(f"unknown damage {kind!r}: use one of {', '.join(DAMAGES)}")

@@ -14,8 +14,8 @@ from __future__ import annotations
 # connectivity (setup kernels); every name is re-exported here. tstep (the t-update from N in
 # one pass), fidelity (the tangential anchor) and priors (the flat-TV / per-edge-weight t-update)
 # are imported from their modules.
-from ._jit import CACHE_DISABLED, FASTMATH, HAVE_NUMBA, njit  # noqa: F401
-from .admm import (  # noqa: F401
+from meshrepair._kernels._jit import CACHE_DISABLED, FASTMATH, HAVE_NUMBA, njit  # noqa: F401
+from meshrepair._kernels.admm import (  # noqa: F401
     _np_normalize_z,
     _np_reg_energy,
     _np_rhs,
@@ -29,7 +29,7 @@ from .admm import (  # noqa: F401
     update_rho1,
     update_rho2,
 )
-from .connectivity import (  # noqa: F401
+from meshrepair._kernels.connectivity import (  # noqa: F401
     _np_edges_from_groups,
     _np_face_neighbour_table,
     _np_group_halfedges,
@@ -42,7 +42,7 @@ from .connectivity import (  # noqa: F401
     morton,
     union_find,
 )
-from .edges import (  # noqa: F401
+from meshrepair._kernels.edges import (  # noqa: F401
     _np_edge_lengths,
     _np_grad_edges,
     _np_grad_edges_T,
@@ -53,7 +53,7 @@ from .edges import (  # noqa: F401
     neighbor_sum,
     umbrella,
 )
-from .faces import (  # noqa: F401
+from meshrepair._kernels.faces import (  # noqa: F401
     _np_face_area2_lmax2,
     _np_face_normals,
     _np_vertex_normals,
@@ -61,7 +61,7 @@ from .faces import (  # noqa: F401
     face_normals,
     vertex_normals,
 )
-from .venergy import (  # noqa: F401
+from meshrepair._kernels.venergy import (  # noqa: F401
     _np_venergy,
     _np_venergy_grad,
     _np_vhess_diag,
@@ -71,7 +71,7 @@ from .venergy import (  # noqa: F401
 )
 
 if HAVE_NUMBA:
-    from .admm import (  # noqa: F401
+    from meshrepair._kernels.admm import (  # noqa: F401
         _nb_lap_matvec_dot,
         _nb_normalize_z,
         _nb_pcg,
@@ -82,7 +82,7 @@ if HAVE_NUMBA:
         _nb_update_rho1,
         _nb_update_rho2,
     )
-    from .connectivity import (  # noqa: F401
+    from meshrepair._kernels.connectivity import (  # noqa: F401
         _nb_creased,
         _nb_edges_from_groups,
         _nb_face_neighbour_table,
@@ -90,17 +90,17 @@ if HAVE_NUMBA:
         _nb_morton,
         _nb_union_find,
     )
-    from .edges import (  # noqa: F401
+    from meshrepair._kernels.edges import (  # noqa: F401
         _nb_edge_lengths,
         _nb_grad_edges,
         _nb_grad_edges_T,
         _nb_neighbor_sum,
         _nb_umbrella,
     )
-    from .faces import (  # noqa: F401
+    from meshrepair._kernels.faces import (  # noqa: F401
         _nb_face_area2_lmax2,
         _nb_face_normals,
         _nb_vertex_normals,
         _tri,
     )
-    from .venergy import _nb_venergy, _nb_venergy_grad, _nb_vhess_diag  # noqa: F401
+    from meshrepair._kernels.venergy import _nb_venergy, _nb_venergy_grad, _nb_vhess_diag  # noqa: F401

@@ -6,8 +6,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._jit import FASTMATH, HAVE_NUMBA, njit
-from .edges import _np_grad_edges, _np_grad_edges_T
+from meshrepair._kernels._jit import FASTMATH, HAVE_NUMBA, njit
+from meshrepair._kernels.edges import _np_grad_edges, _np_grad_edges_T
 
 if HAVE_NUMBA:
 
@@ -249,7 +249,7 @@ if HAVE_NUMBA:
 
     @njit(cache=True, fastmath=FASTMATH)
     def _nb_lengths_reg_energy(V, E, Nv, fa, fb, sharp, a, w):  # pragma: no cover - compiled
-        # meshrepair._fused.lengths_reg_energy: the edge lengths and _nb_reg_energy in one pass
+        # meshrepair.model._fused.lengths_reg_energy: the edge lengths and _nb_reg_energy in one pass  # noqa: E501
         l = np.empty(E.shape[0])
         knee = np.sqrt(2.0 / a)
         s2a = np.sqrt(2.0 * a)

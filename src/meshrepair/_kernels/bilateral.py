@@ -1,4 +1,4 @@
-"""Kernels of :mod:`meshrepair.polish`: one bilateral normal-filter pass over a CSR face
+"""Kernels of :mod:`meshrepair.denoise.polish`: one bilateral normal-filter pass over a CSR face
 neighbourhood, and the Sun et al. vertex steps towards given face normals ((26) with λ = 0).
 Numpy twins are the reference (tests/test_polish.py checks them equal)."""
 
@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._jit import HAVE_NUMBA, njit
+from meshrepair._kernels._jit import HAVE_NUMBA, njit
 
 
 def _np_bilateral(indptr, indices, N, area, C, gate, sigma_c, sigma_s):
@@ -153,7 +153,8 @@ if HAVE_NUMBA:
 
 
 def bilateral_pass(indptr, indices, N, area, C, gate, sigma_c, sigma_s):
-    """``n'`` of :mod:`meshrepair.polish` on the rows of ``gate`` (the others keep ``N``)."""
+    """``n'`` of :mod:`meshrepair.denoise.polish` on the rows of ``gate`` (the others keep
+    ``N``)."""
     args = (np.ascontiguousarray(indptr, np.int64), np.ascontiguousarray(indices),
             np.ascontiguousarray(N, np.float64), np.ascontiguousarray(area, np.float64),
             np.ascontiguousarray(C, np.float64), np.ascontiguousarray(gate, np.bool_),
@@ -163,7 +164,7 @@ def bilateral_pass(indptr, indices, N, area, C, gate, sigma_c, sigma_s):
 
 def spread_rows(indptr, indices, N):
     """Per row f of the CSR neighbourhood, the RMS angle (degrees) of ``N[g]`` to their
-    normalised mean, ``s_f`` of :mod:`meshrepair.polish`."""
+    normalised mean, ``s_f`` of :mod:`meshrepair.denoise.polish`."""
     args = (np.ascontiguousarray(indptr, np.int64), np.ascontiguousarray(indices),
             np.ascontiguousarray(N, np.float64))
     return _nb_spread_rows(*args) if HAVE_NUMBA else _np_spread_rows(*args)

@@ -1,15 +1,15 @@
 """Local closest points on a triangle mesh in one pass (the kernel of
-:func:`meshrepair.reproject.closest_points_local` with one ring of candidates).
+:func:`meshrepair.denoise.reproject.closest_points_local` with one ring of candidates).
 
 For each query ``P[i]`` the candidate faces are the union of the faces of vertex ``i`` and of
 vertex ``near[i]`` (ascending face index, as the rows of the sparse sum in the numpy twin); each
 gets Ericson's exact point-triangle closest point (*Real-Time Collision Detection*, 5.1.5) with
 the same operations, in the same order, as
-:func:`meshrepair.reproject.closest_point_triangles`, and the first face of least squared
+:func:`closest_point_triangles`, and the first face of least squared
 distance wins. Strict IEEE arithmetic (no fast-math), the three-term dot products summed as
 numpy's ``einsum`` sums them on this machine (``(x0 y0 + x2 y2) + x1 y1``, as
 ``_kernels/fidelity.py`` does), so the result equals the numpy twin's bit for bit there (the
-1.18M-vertex run of docs/performance.md, round 11v) and to rounding elsewhere
+1.18M-vertex run of docs/performance.md) and to rounding elsewhere
 (tests/test_kernels_weighted.py). It replaces ~10 candidate rows of temporaries per vertex by
 scalars: at 1.18M vertices one ``closest_points_local`` call took 3.36 s of CPU with the numpy
 loop and 1.33 s with this pass (of which 0.32 s the pass, the rest the k-d tree query).
@@ -18,8 +18,10 @@ loop and 1.33 s with this pass (of which 0.32 s the pass, the rest the k-d tree 
 from __future__ import annotations
 
 import numpy as np
+import scipy.sparse as sp
+from scipy.spatial import cKDTree
 
-from ._jit import HAVE_NUMBA, njit
+from meshrepair._kernels._jit import HAVE_NUMBA, njit
 
 if HAVE_NUMBA:
 
@@ -134,12 +136,8 @@ def closest_points_one_ring(V: np.ndarray, F: np.ndarray, P: np.ndarray, indptr:
 def _np_closest_points_local(V: np.ndarray, F: np.ndarray, P: np.ndarray, *, rings: int = 1,
                              chunk: int = 200_000,
                              search: tuple | None = None) -> np.ndarray:
-    """The numpy twin of :func:`meshrepair.reproject.closest_points_local` (batches of
+    """The numpy twin of :func:`meshrepair.denoise.reproject.closest_points_local` (batches of
     ``chunk`` vertices; any ``rings``)."""
-    import scipy.sparse as sp
-
-    from ..reproject import closest_point_triangles, local_search
-
     V = np.asarray(V, dtype=np.float64)
     P = np.asarray(P, dtype=np.float64)
     F = np.asarray(F, dtype=np.int64)
@@ -178,3 +176,67 @@ def _np_closest_points_local(V: np.ndarray, F: np.ndarray, P: np.ndarray, *, rin
     has = np.asarray(VF.sum(axis=1)).ravel() > 0
     out[~has] = V[~has]  # isolated vertices have no surface to project on
     return out
+
+
+def closest_point_triangles(P: np.ndarray, A: np.ndarray, B: np.ndarray, C: np.ndarray
+                            ) -> np.ndarray:
+    """Closest point of each ``P[k]`` on the triangle ``(A[k], B[k], C[k])``.
+
+    Parameters
+    ----------
+    P, A, B, C : (n, 3) float64
+
+    Returns
+    -------
+    (n, 3) float64
+    """
+    ab, ac, ap = B - A, C - A, P - A
+    d1, d2 = np.einsum("ij,ij->i", ab, ap), np.einsum("ij,ij->i", ac, ap)
+    bp = P - B
+    d3, d4 = np.einsum("ij,ij->i", ab, bp), np.einsum("ij,ij->i", ac, bp)
+    cp = P - C
+    d5, d6 = np.einsum("ij,ij->i", ab, cp), np.einsum("ij,ij->i", ac, cp)
+    va = d3 * d6 - d5 * d4
+    vb = d5 * d2 - d1 * d6
+    vc = d1 * d4 - d3 * d2
+    tiny = 1e-300
+    # interior (default), then the edge and vertex regions overwrite it in reverse priority
+    den = np.maximum(va + vb + vc, tiny)
+    v, w = vb / den, vc / den
+    out = A + v[:, None] * ab + w[:, None] * ac
+    # edge BC
+    m = (va <= 0) & (d4 - d3 >= 0) & (d5 - d6 >= 0)
+    s = (d4 - d3) / np.maximum((d4 - d3) + (d5 - d6), tiny)
+    out[m] = B[m] + s[m, None] * (C - B)[m]
+    # edge AC
+    m = (vb <= 0) & (d2 >= 0) & (d6 <= 0)
+    s = d2 / np.maximum(d2 - d6, tiny)
+    out[m] = A[m] + s[m, None] * ac[m]
+    # edge AB
+    m = (vc <= 0) & (d1 >= 0) & (d3 <= 0)
+    s = d1 / np.maximum(d1 - d3, tiny)
+    out[m] = A[m] + s[m, None] * ab[m]
+    # vertices
+    m = (d6 >= 0) & (d5 <= d6)
+    out[m] = C[m]
+    m = (d3 >= 0) & (d4 <= d3)
+    out[m] = B[m]
+    m = (d1 <= 0) & (d2 <= 0)
+    out[m] = A[m]
+    return out
+
+
+def _vertex_faces(F: np.ndarray, n_vertices: int) -> sp.csr_matrix:
+    nF = len(F)
+    return sp.csr_matrix((np.ones(3 * nF, dtype=np.int8),
+                          (F.ravel(), np.repeat(np.arange(nF), 3))), shape=(n_vertices, nF))
+
+
+def local_search(V: np.ndarray, F: np.ndarray) -> tuple[sp.csr_matrix, cKDTree]:
+    """What :func:`closest_points_local` builds on the surface ``(V, F)``: the vertex-face
+    incidence (ascending faces per row) and the k-d tree of ``V``; pass it as ``search`` to
+    several calls on the same surface."""
+    V = np.asarray(V, dtype=np.float64)
+    VF = _vertex_faces(np.asarray(F, dtype=np.int64), len(V))
+    VF.sort_indices()
+    return VF, cKDTree(V)

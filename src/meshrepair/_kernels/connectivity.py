@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._jit import HAVE_NUMBA, njit
+from meshrepair._kernels._jit import HAVE_NUMBA, njit
 
 
 def _np_group_halfedges(F, n_vertices):

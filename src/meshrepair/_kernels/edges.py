@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._jit import FASTMATH, HAVE_NUMBA, njit
+from meshrepair._kernels._jit import FASTMATH, HAVE_NUMBA, njit
 
 
 def _np_edge_lengths(V, E):

@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._jit import FASTMATH, HAVE_NUMBA, njit
+from meshrepair._kernels._jit import FASTMATH, HAVE_NUMBA, njit
 
 
 def _np_face_normals(V, F):
@@ -43,7 +43,7 @@ if HAVE_NUMBA:
 
     # The kernels below call the inlined helpers above; numba's on-disk cache does not notice a
     # change of an inlined helper defined in another file, so every caller stays in this file
-    # (meshrepair._fused only wraps the fused ones).
+    # (meshrepair.model._fused only wraps the fused ones).
 
     @njit(cache=True, fastmath=FASTMATH)
     def _nb_face_normals(V, F):  # pragma: no cover - compiled
@@ -62,7 +62,7 @@ if HAVE_NUMBA:
 
     @njit(cache=True, fastmath=FASTMATH)
     def _nb_normals_update_rho2(V, F, N, rho2, beta2):  # pragma: no cover - compiled
-        # meshrepair._fused.normals_update_rho2: _nb_face_normals and the update (21)
+        # meshrepair.model._fused.normals_update_rho2: _nb_face_normals and the update (21)
         Nv = np.zeros((F.shape[0], 3))
         s = 0.0
         for m in range(F.shape[0]):

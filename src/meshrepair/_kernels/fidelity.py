@@ -1,22 +1,22 @@
-"""Kernel of the tangential anchor (:func:`meshrepair.fidelity.tangential_anchor`): the
+"""Kernel of the tangential anchor (:func:`meshrepair.model.fidelity.tangential_anchor`): the
 area-weighted vertex normals of ``V`` and the removal of the weighted tangential part of
 ``V - V⁰`` in one face pass and one vertex pass, with no numpy temporaries (it runs after every
 V-step on CAD regions; 104 → 65 µs of CPU per call on a 4,610-vertex mesh, where the numpy
 expressions were 5 % of a default denoise: docs/performance.md). Same arithmetic as
 ``_kernels.vertex_normals`` followed by the numpy expression of the twin, in the same order
 (the dot product summed as numpy's ``einsum`` sums it): results equal bit for bit, so the
-iterates of the solver do not change (a rounding-level change moved the MSAE of the chaotic
-fandisk γ0.7 row by +4.6 %)."""
+iterates of the solver do not change (a rounding-level change can move the MSAE of a
+heavy-noise row by several per cent)."""
 
 from __future__ import annotations
 
 import numpy as np
 
-from ._jit import HAVE_NUMBA, njit
+from meshrepair._kernels._jit import HAVE_NUMBA, njit
 
 
 def _np_tangential_anchor(V, V0, F, weight):
-    from .faces import _np_vertex_normals
+    from meshrepair._kernels.faces import _np_vertex_normals
 
     n = _np_vertex_normals(V, F)
     d = V - V0
@@ -25,7 +25,7 @@ def _np_tangential_anchor(V, V0, F, weight):
 
 
 if HAVE_NUMBA:
-    from .faces import _tri
+    from meshrepair._kernels.faces import _tri
 
     @njit(cache=True)
     def _anchor_vertex(V, V0, vn, s, v, w, out):  # pragma: no cover - compiled
@@ -110,8 +110,8 @@ if HAVE_NUMBA:
 
 def tangential_anchor_on(V, V0, F, weight, support):
     """:func:`tangential_anchor` with ``support = anchor_support(F, weight)``: the face pass
-    only over the faces of the anchored vertices (round 11v: the anchor acts on the CAD region
-    C; the full pass took 43 ms per call, wall, in main's loaded 1.18M-vertex profile). Equal to
+    only over the faces of the anchored vertices (the anchor acts on the CAD region C; the
+    full pass took 43 ms per call, wall, in the loaded 1.18M-vertex profile). Equal to
     :func:`tangential_anchor`: the same sums in the same order on the anchored vertices, ``V``
     itself elsewhere (``w = 0``)."""
     faces, verts, slot = support

@@ -1,11 +1,12 @@
-"""Kernel of :mod:`meshrepair.modes`: mean shift of face normals over CSR face neighbourhoods.
+"""Kernel of :mod:`meshrepair.denoise.modes`: mean shift of face normals over CSR face
+neighbourhoods.
 The numpy twin is the reference (tests/test_modes.py checks them equal)."""
 
 from __future__ import annotations
 
 import numpy as np
 
-from ._jit import HAVE_NUMBA, njit
+from meshrepair._kernels._jit import HAVE_NUMBA, njit
 
 MODE_TOL2 = 1e-12
 """A row stops when its mean-shift step moves the unit normal by less than 1e-6 (squared)."""

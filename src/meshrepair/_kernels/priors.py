@@ -1,11 +1,11 @@
-"""Kernels of the flat-TV edge class (:mod:`meshrepair.priors`): the t-update (22) with three
+"""Kernels of the flat-TV edge class (:mod:`meshrepair.model.priors`): the t-update (22) with three
 edge classes and the edge lengths with the regulariser of (6) for the history energy, each in one
 edge pass. As numpy expressions over the flat subset (fancy indexing, ``prox_mc``, the energy
 recomputed and corrected) they were 6 % of a default denoise on a 4,610-vertex mesh; the
 t-update measured 152 → 44 µs of CPU per call there (docs/performance.md).
 
 Same arithmetic as ``_kernels._nb_t_update`` (sharp and smooth edges) and
-:func:`meshrepair.penalties.prox_mc` (flat edges), and as ``_kernels._nb_lengths_reg_energy``
+:func:`meshrepair.model.penalties.prox_mc` (flat edges), and as ``_kernels._nb_lengths_reg_energy``
 with the MC value of ``a_flat`` on the flat, non-sharp edges: the t-update equals the composition
 it replaces bit for bit (its sums in the same order), so the solver's iterates do not change; the
 history energy equals its twin to rounding (``tests/test_kernels_priors.py``)."""
@@ -14,11 +14,11 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._jit import FASTMATH, HAVE_NUMBA, njit
+from meshrepair._kernels._jit import FASTMATH, HAVE_NUMBA, njit
 
 
 def _np_t_update_mixed(DN, rho1, sharp, flat, a, a_flat, beta1, w):
-    from ..penalties import prox_mc
+    from meshrepair._kernels.mc import prox_mc
 
     sharp = np.asarray(sharp, bool)
     w = np.asarray(w, dtype=np.float64)
@@ -34,9 +34,9 @@ def _np_t_update_mixed(DN, rho1, sharp, flat, a, a_flat, beta1, w):
 
 
 def _np_lengths_reg_energy_mixed(V, E, Nv, fa, fb, sharp, flat, a, a_flat, w):
-    from ..penalties import mc_penalty
-    from .admm import _np_reg_energy
-    from .edges import _np_edge_lengths
+    from meshrepair._kernels.admm import _np_reg_energy
+    from meshrepair._kernels.edges import _np_edge_lengths
+    from meshrepair._kernels.mc import mc_penalty
 
     l = _np_edge_lengths(V, E)
     f = flat & ~sharp
@@ -47,7 +47,7 @@ def _np_lengths_reg_energy_mixed(V, E, Nv, fa, fb, sharp, flat, a, a_flat, w):
 
 
 if HAVE_NUMBA:
-    from .admm import _edge_reg
+    from meshrepair._kernels.admm import _edge_reg
 
     @njit(cache=True, inline="always")
     def _firm(r0, r1, r2, v, zeta, nr):  # pragma: no cover - compiled
@@ -145,7 +145,7 @@ def t_update_mixed(DN, rho1, sharp, flat, a, a_flat, beta1, w):
 
 def lengths_reg_energy_mixed(V, E, Nv, fa, fb, sharp, flat, a, a_flat, w):
     """Lengths of the interior edges ``E`` of ``V`` and the regulariser of the module
-    :mod:`meshrepair.priors` there (MC ``a`` on ``sharp``, MC ``a_flat`` on ``flat & ~sharp``,
+    :mod:`meshrepair.model.priors` there (MC ``a`` on ``sharp``, MC ``a_flat`` on ``flat & ~sharp``,
     ``w |t|²`` elsewhere, ``t = l (Nv[fa] - Nv[fb])``); returns ``(l, energy)``."""
     if HAVE_NUMBA:
         l, e = _nb_lengths_reg_energy_mixed(V, E, Nv, fa, fb, sharp, flat, float(a),

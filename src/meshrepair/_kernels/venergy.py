@@ -1,11 +1,11 @@
 """Kernels of the V-subproblem (26): its energy, gradient (28) and Jacobi scale, and the fused
-passes of the Armijo V-descent (:mod:`meshrepair._fused`) that share their loop bodies."""
+passes of the Armijo V-descent (:mod:`meshrepair.model._fused`) that share their loop bodies."""
 
 from __future__ import annotations
 
 import numpy as np
 
-from ._jit import FASTMATH, HAVE_NUMBA, njit
+from meshrepair._kernels._jit import FASTMATH, HAVE_NUMBA, njit
 
 
 def _np_venergy(V, F, z, V0, wfid):
@@ -122,7 +122,7 @@ if HAVE_NUMBA:
 
     # The kernels below call the inlined helpers above; numba's on-disk cache does not notice a
     # change of an inlined helper defined in another file, so every caller stays in this file
-    # (meshrepair._fused only wraps the fused ones).
+    # (meshrepair.model._fused only wraps the fused ones).
 
     @njit(cache=True, fastmath=FASTMATH)
     def _nb_venergy(V, F, z, V0, wfid):  # pragma: no cover - compiled
@@ -152,7 +152,7 @@ if HAVE_NUMBA:
 
     @njit(cache=True, fastmath=FASTMATH)
     def _nb_venergy_grad_hdiag(V, F, z, V0, wfid, grad, h):  # pragma: no cover - compiled
-        # meshrepair._fused.venergy_grad_hdiag: _nb_venergy_grad and _nb_vhess_diag in one pass
+        # meshrepair.model._fused.venergy_grad_hdiag: _nb_venergy_grad and _nb_vhess_diag in one pass  # noqa: E501
         f = 0.0
         for v in range(V.shape[0]):
             f += _fidelity_grad(V, V0, wfid, v, grad)
@@ -173,7 +173,7 @@ if HAVE_NUMBA:
 
     @njit(cache=True, fastmath=FASTMATH)
     def _nb_venergy_trial(V, d, step, out, F, z, V0, wfid):  # pragma: no cover - compiled
-        # meshrepair._fused.venergy_trial: out = V + step d, then _nb_venergy(out, ...)
+        # meshrepair.model._fused.venergy_trial: out = V + step d, then _nb_venergy(out, ...)
         f = 0.0
         for v in range(V.shape[0]):
             x0 = V[v, 0] + step * d[v, 0]
@@ -195,7 +195,7 @@ if HAVE_NUMBA:
 
     @njit(cache=True, fastmath=FASTMATH)
     def _nb_venergy_grad_trial(V, d, step, out, F, z, V0, wfid, grad):  # pragma: no cover
-        # meshrepair._fused.venergy_grad_trial: out = V + step d (as _nb_venergy_trial), then
+        # meshrepair.model._fused.venergy_grad_trial: out = V + step d (as _nb_venergy_trial), then
         # _nb_venergy_grad(out, ...) into grad: the same values as the two calls
         f = 0.0
         for v in range(V.shape[0]):
@@ -237,7 +237,7 @@ def vhess_diag(V, F, z, wfid):
 
 
 def venergy(V, F, z, V0, wfid):
-    """Energy (26) up to a constant (see :class:`meshrepair.inner.VSubproblem`)."""
+    """Energy (26) up to a constant (see :class:`meshrepair.model.inner.VSubproblem`)."""
     if HAVE_NUMBA:
         return float(_nb_venergy(V, F, z, V0, wfid))
     return _np_venergy(V, F, z, V0, wfid)

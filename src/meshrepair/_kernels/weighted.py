@@ -1,7 +1,7 @@
 """Fused edge passes of the ADMM loop with per-edge Willmore weights (the outside weight of a
-CAD part, :func:`meshrepair.denoise_rules.outside_weight`).
+CAD part, :func:`meshrepair.denoise.rules.outside_weight`).
 
-With ``willmore_edges`` the loop of :class:`meshrepair.solver.ADMMSolver` took, per iteration,
+With ``willmore_edges`` the loop of :class:`meshrepair.model.solver.ADMMSolver` took, per iteration,
 ``grad_edges`` (``D N``, an ``(nE, 3)`` temporary) then ``t_update_mixed`` for the t-update (17),
 and ``lengths_reg_energy_mixed`` then ``willmore_extra`` for the edge lengths and the history
 energy: four edge passes. Here they are two:
@@ -13,9 +13,9 @@ energy: four edge passes. Here they are two:
   ``lengths_reg_energy_mixed`` and the per-edge weights' share of ``willmore_extra`` in one
   pass, two accumulators summed as the two kernels sum them.
 
-In main's 1.18M-vertex profile (docs/performance.md, round 11v; wall time on a loaded machine)
-the two passes removed took 0.060 s (``willmore_extra``) and 0.026 s (``grad_edges``) per
-feature iteration. The numpy twins are the compositions they replace
+In the 1.18M-vertex profile (docs/performance.md; wall time on a loaded machine) the two
+passes removed took 0.060 s (``willmore_extra``) and 0.026 s (``grad_edges``) per feature
+iteration. The numpy twins are the compositions they replace
 (``tests/test_kernels_weighted.py``).
 """
 
@@ -23,28 +23,33 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._jit import FASTMATH, HAVE_NUMBA, njit
+from meshrepair._kernels._jit import FASTMATH, HAVE_NUMBA, njit
 
 
 def _np_t_from_normals_weighted(N, l, fa, fb, rho1, sharp, flat, a, a_flat, beta1, w):
-    from .edges import _np_grad_edges
-    from .priors import _np_t_update_mixed
+    from meshrepair._kernels.edges import _np_grad_edges
+    from meshrepair._kernels.priors import _np_t_update_mixed
 
     return _np_t_update_mixed(_np_grad_edges(N, l, fa, fb), rho1, sharp, flat, a, a_flat,
                               beta1, w)
 
 
+def _np_willmore_extra(l, Nv, fa, fb, w, w0, skip):
+    f = np.flatnonzero(~skip)
+    tf = l[f, None] * (Nv[fa[f]] - Nv[fb[f]])
+    return float(((w[f] - w0) * np.einsum("ij,ij->i", tf, tf)).sum())
+
+
 def _np_lengths_reg_energy_weighted(V, E, Nv, fa, fb, sharp, flat, a, a_flat, w, w_int):
-    from .._fused import _np_willmore_extra
-    from .priors import _np_lengths_reg_energy_mixed
+    from meshrepair._kernels.priors import _np_lengths_reg_energy_mixed
 
     l, e = _np_lengths_reg_energy_mixed(V, E, Nv, fa, fb, sharp, flat, a, a_flat, w)
     return l, e, _np_willmore_extra(l, Nv, fa, fb, w_int, w, sharp | flat)
 
 
 if HAVE_NUMBA:
-    from .admm import _edge_reg
-    from .priors import _firm
+    from meshrepair._kernels.admm import _edge_reg
+    from meshrepair._kernels.priors import _firm
 
     @njit(cache=True)
     def _nb_t_from_normals_weighted(N, l, fa, fb, rho1, sharp, flat, a, a_flat, beta1, w

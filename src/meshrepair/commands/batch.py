@@ -18,8 +18,8 @@ from __future__ import annotations
 import argparse
 import logging
 
-from ..errors import MeshRepairError
-from ..jobs import TASKS
+from meshrepair.batch.jobs import TASKS
+from meshrepair.errors import MeshRepairError
 
 
 class _Once:
@@ -48,9 +48,9 @@ class _Once:
 
 
 def _add_task_options(p: argparse.ArgumentParser) -> dict:
-    from .complete import add_complete_options
-    from .denoise import add_denoise_options
-    from .fill import add_fill_options, add_inpaint_options, add_solve_options
+    from meshrepair.commands.complete import add_complete_options
+    from meshrepair.commands.denoise import add_denoise_options
+    from meshrepair.commands.fill import add_fill_options, add_inpaint_options, add_solve_options
 
     seen: dict = {}
     dests: dict = {t: set() for t in TASKS}
@@ -84,11 +84,12 @@ def _one_of(args, names: tuple[str, ...], task: str) -> None:
 
 
 def task_options(args: argparse.Namespace) -> dict:
-    """The options of ``args.task`` for :func:`meshrepair.batch.run`; refuses options of other
+    """The options of ``args.task`` for :func:`meshrepair.batch.orchestrate.run`; refuses options
+    of other
     tasks (e.g. ``--keep-border`` with ``--task denoise``)."""
-    from .complete import complete_options
-    from .denoise import denoise_options
-    from .fill import fill_options, inpaint_options
+    from meshrepair.commands.complete import complete_options
+    from meshrepair.commands.denoise import denoise_options
+    from meshrepair.commands.fill import fill_options, inpaint_options
 
     spec = args._batch_options
     mine = spec["dests"][args.task]
@@ -115,7 +116,7 @@ def run_batch(args: argparse.Namespace) -> int:
     """Handler of ``meshrepair batch``; returns 0, or 1 if a mesh failed."""
     from tqdm import tqdm
 
-    from .. import batch
+    import meshrepair.batch.orchestrate as batch
     options = task_options(args)
     state: dict = {}
 

@@ -20,106 +20,17 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import MeshRepairError
+from meshrepair.errors import MeshRepairError
 
 log = logging.getLogger(__name__)
-
-_MASK_SUFFIXES = (".ply", ".npy")
-
-
-def read_face_selection(path: str | Path, n_faces: int) -> np.ndarray:
-    """Face indices from a text file (whitespace/comma separated integers, ``#`` comments).
-
-    Returns
-    -------
-    (k,) int64, sorted unique face indices in ``[0, n_faces)``
-    """
-    from ..io import check_input_file
-
-    p = check_input_file(path, "region ")
-    try:
-        text = p.read_text(encoding="utf-8")
-    except (OSError, UnicodeDecodeError) as exc:
-        raise MeshRepairError(f"cannot read region file {str(p)!r} as text: {exc}") from None
-    toks = [t for line in text.splitlines()
-            for t in line.split("#", 1)[0].replace(",", " ").split()]
-    try:
-        idx = np.array([int(t) for t in toks], dtype=np.int64)
-    except ValueError:
-        raise MeshRepairError(f"region file {str(p)!r} must hold integer face indices (or give a "
-                              ".ply/.npy per-vertex mask instead)") from None
-    if idx.size == 0:
-        raise MeshRepairError(f"region file {str(p)!r} lists no face")
-    bad = (idx < 0) | (idx >= n_faces)
-    if bad.any():
-        raise MeshRepairError(f"region file {str(p)!r}: {int(bad.sum())} face indices out of range "
-                              f"[0, {n_faces - 1}] (e.g. {idx[bad][:5].tolist()})")
-    return np.unique(idx)
-
-
-def _selection(path: str, V: np.ndarray, F: np.ndarray) -> dict:
-    """``{"region": faces}`` or ``{"region_vertices": mask}`` from a selection file."""
-    if Path(path).suffix.lower() in _MASK_SUFFIXES:
-        from ..io import read_vertex_mask
-
-        return {"region_vertices": read_vertex_mask(path, len(V))}
-    return {"region": read_face_selection(path, len(F))}
-
-
-def complete_arguments(mesh, tmesh, options: dict) -> tuple:
-    """``(template, kw)`` for :func:`meshrepair.complete` from the read meshes (``tmesh`` None
-    with ``mirror``) and :func:`complete_options`' values (selection files are read here)."""
-    from ..complete import extract_patch
-
-    kw = dict(options)
-    region, hole, template_region = kw.pop("region"), kw.pop("hole"), kw.pop("template_region")
-    mirror = bool(kw.pop("mirror", False))
-    if mirror:
-        if template_region is not None or kw.get("transform") is not None:
-            raise MeshRepairError("--mirror finds the template itself: drop --template-region "
-                                  "and --transform")
-        template = "mirror"
-    elif tmesh is None:
-        raise MeshRepairError("complete needs a template mesh (or --mirror)")
-    elif template_region is not None:
-        sel = _selection(template_region, tmesh.V, tmesh.F)
-        if "region" in sel:
-            faces = sel["region"]
-        else:
-            faces = np.flatnonzero(sel["region_vertices"][tmesh.F].all(axis=1))
-            if faces.size == 0:
-                raise MeshRepairError("--template-region selects no face of the template")
-        extract_patch(tmesh.V, tmesh.F, faces)  # a clear error for an empty/invalid selection
-        # a piece of a mesh: its context rings around the selection take part in the alignment
-        template = (tmesh.V, tmesh.F, faces)
-    else:
-        template = (tmesh.V, tmesh.F)
-    if region is not None:
-        kw.update(_selection(region, mesh.V, mesh.F))
-    elif hole is not None:
-        kw["hole"] = hole
-    else:
-        raise MeshRepairError("complete needs --region FILE or --hole K")
-    return template, kw
-
-
-def output_attributes(res, out: str | Path) -> dict | None:
-    """Per-vertex m_v, strip and template attributes written with a PLY output (else None)."""
-    if Path(out).suffix.lower() != ".ply":
-        return None
-    nV = len(res.V)
-    strip = np.zeros(nV, np.uint8)
-    strip[res.strip_vertices] = 1
-    tmpl = np.zeros(nV, np.uint8)
-    tmpl[res.template_vertices] = 1
-    return {"m_v": res.M_V.astype(np.float32), "strip": strip, "template": tmpl}
 
 
 def run_complete(args: argparse.Namespace) -> int:
     """Handler of ``meshrepair complete``; returns the exit code."""
-    from ..complete import complete
-    from ..io import read_mesh, write_mesh
-    from .common import ProgressBar, run_outputs, write_json_log
+    from meshrepair.commands.common import ProgressBar, run_outputs, write_json_log
+    from meshrepair.complete.api import complete
+    from meshrepair.complete.files import template_vertex_map
+    from meshrepair.io import read_mesh, write_like_input
 
     paths = list(args.paths)
     if args.mirror:
@@ -138,6 +49,8 @@ def run_complete(args: argparse.Namespace) -> int:
     t0 = time.perf_counter()
     mesh = read_mesh(args.input)
     tmesh = read_mesh(args.template) if args.template is not None else None
+    from meshrepair.complete.files import complete_arguments, output_attributes
+
     template, kw = complete_arguments(mesh, tmesh, complete_options(args))
     t_read = time.perf_counter() - t0
     bar = ProgressBar(args.iterations, "blend", enabled=not args.quiet)
@@ -146,8 +59,8 @@ def run_complete(args: argparse.Namespace) -> int:
     finally:
         bar.close()
     t_solve = time.perf_counter() - t0 - t_read
-    write_mesh(out, res.V, res.F, vertex_attributes=output_attributes(res, out),
-               overwrite=args.force)
+    write_like_input(out, mesh, res, extra=output_attributes(res, out), force=args.force,
+                     template=tmesh, template_map=template_vertex_map(tmesh, template, res))
     c = res.correspondence
     if log_path is not None:
         corr = {k: (v.tolist() if isinstance(v, np.ndarray) else v) for k, v in c.items()}
@@ -170,7 +83,7 @@ def run_complete(args: argparse.Namespace) -> int:
           f"-> {c['rms_after']:.3g}, {res.iterations} iterations "
           f"({time.perf_counter() - t0:.2f} s)")
     print(alignment_summary(res))
-    from .common import write_run_report
+    from meshrepair.commands.common import write_run_report
 
     tmpl_v = np.zeros(len(res.V), bool)
     tmpl_v[res.template_vertices] = True
@@ -215,7 +128,7 @@ def alignment_summary(res) -> str:
 
 def add_complete_options(p, *, required: bool = True) -> None:
     """The completion options of ``meshrepair complete`` (shared with ``meshrepair batch``)."""
-    from ..complete_modes import ICP_MODES, MODES, ORIENTATIONS  # not the task: no numba
+    from meshrepair.complete.modes import ICP_MODES, MODES, ORIENTATIONS  # not the task: no numba
 
     g = p.add_mutually_exclusive_group(required=required)
     g.add_argument("--region", metavar="FILE",
@@ -259,7 +172,8 @@ def add_complete_options(p, *, required: bool = True) -> None:
 
 def complete_options(args: argparse.Namespace) -> dict:
     """``region``, ``hole``, ``template_region``, ``mirror`` and the keyword arguments of
-    :func:`meshrepair.complete` from the parsed options (see :func:`complete_arguments`)."""
+    :func:`meshrepair.complete` from the parsed options (see
+    :func:`meshrepair.complete.files.complete_arguments`)."""
     return dict(region=args.region, hole=args.hole, template_region=args.template_region,
                 mirror=args.mirror, transform=args.transform, strip_rings=args.strip_rings,
                 mode=args.mode, allow_scale=args.allow_scale, orientation=args.orientation,
@@ -291,7 +205,7 @@ def register(subparsers) -> None:
                    "(readable by 'meshrepair report --log')")
     p.add_argument("--force", action="store_true", help="overwrite OUTPUT if it exists")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
-    from .common import add_report_option
+    from meshrepair.commands.common import add_report_option
 
     add_report_option(p)
     p.set_defaults(func=run_complete)

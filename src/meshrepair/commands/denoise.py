@@ -11,7 +11,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .common import (
+from meshrepair.commands.common import (
     ProgressBar,
     make_folder,
     output_folder,
@@ -31,10 +31,17 @@ def _write_history(path: Path | None, result, extra: dict, force: bool) -> None:
 
 
 def run_denoise(args: argparse.Namespace) -> int:
-    from ..denoise import denoise
-    from ..io import read_mesh, write_mesh
-    from ..solver import StopRequested
+    from meshrepair.denoise.api import denoise
+    from meshrepair.io import read_mesh, write_like_input
+    from meshrepair.model.solver import StopRequested
 
+    if args.explain:
+        return _explain(args)
+    if args.output is None:
+        from meshrepair.errors import MeshRepairError
+
+        raise MeshRepairError("denoise needs an OUTPUT mesh (or --explain to print the plan "
+                              "and write nothing)")
     out, log_path, report_path = run_outputs(args, [args.input], output=args.output)
     m = read_mesh(args.input)
     total = (args.robust_iters if args.robust_iters is not None else 40) + args.feature_iters
@@ -62,7 +69,7 @@ def run_denoise(args: argparse.Namespace) -> int:
         sharp_v = np.zeros(len(r.V), np.uint8)
         sharp_v[r.edges[r.M_E].ravel()] = 1
         attrs["sharp"] = sharp_v
-    write_mesh(out, r.V, r.F, vertex_attributes=attrs or None, overwrite=args.force)
+    write_like_input(out, m, r, extra=attrs, force=args.force)
     _write_history(log_path, r, {"seconds": dt}, args.force)
     print(f"denoised {len(r.V)} vertices in {r.iterations} iterations ({dt:.2f} s, "
           f"{r.stop_reason}); noise estimate gamma={r.noise_estimate:.3f}, lambda="
@@ -71,7 +78,7 @@ def run_denoise(args: argparse.Namespace) -> int:
         print("interrupted: wrote the current iterate", file=sys.stderr)
     print(f"wrote {out}")
     if report_path is not None:
-        from ..report import write_report
+        from meshrepair.report.page import write_report
 
         write_report(report_path, title=f"meshrepair denoise {Path(args.input).name}",
                      input_mesh=(m.V, m.F), output_mesh=(r.V, r.F),
@@ -83,20 +90,39 @@ def run_denoise(args: argparse.Namespace) -> int:
     return 0
 
 
+def _explain(args: argparse.Namespace) -> int:
+    """``denoise IN --explain``: the plan of the call, printed; nothing is written."""
+    from meshrepair.denoise.api import plan_denoise
+    from meshrepair.errors import MeshRepairError
+    from meshrepair.io import read_mesh
+
+    given = [n for n in ("output", "log", "report") if getattr(args, n, None)]
+    if given:
+        raise MeshRepairError(f"--explain writes nothing: drop {', '.join(given)}")
+    m = read_mesh(args.input)
+    t0 = time.perf_counter()
+    plan = plan_denoise(m.V, m.F, **denoise_options(args, output=False))
+    print(plan.explain())
+    print(f"(read and planned in {time.perf_counter() - t0:.2f} s; nothing written)")
+    return 0
+
+
 def run_noise(args: argparse.Namespace) -> int:
-    from ..io import read_mesh, write_mesh
-    from ..noise import add_noise
+    from types import SimpleNamespace
+
+    from meshrepair.io import read_mesh, write_like_input
+    from meshrepair.model.noise import add_noise
 
     out = output_path(args.output, [args.input], force=args.force)
     m = read_mesh(args.input)
     Vn = add_noise(m.V, m.F, args.gamma, direction=args.direction, seed=args.seed)
-    write_mesh(out, Vn, m.F, overwrite=args.force)
+    write_like_input(out, m, SimpleNamespace(V=Vn, F=m.F), force=args.force)
     print(f"added noise gamma={args.gamma} ({args.direction}, seed {args.seed}); wrote {out}")
     return 0
 
 
 def _metrics(V, F, Vr, Fr) -> dict:
-    from ..metrics import distances, msae, vertex_error
+    from meshrepair.metrics import distances, msae, vertex_error
 
     d = distances(V, F, Vr, Fr)
     out = {}
@@ -111,7 +137,7 @@ def _metrics(V, F, Vr, Fr) -> dict:
 
 
 def run_metrics(args: argparse.Namespace) -> int:
-    from ..io import read_mesh
+    from meshrepair.io import read_mesh
 
     a, b = read_mesh(args.result), read_mesh(args.reference)
     vals = _metrics(a.V, a.F, b.V, b.F)
@@ -128,9 +154,9 @@ def run_metrics(args: argparse.Namespace) -> int:
 def run_demo(args: argparse.Namespace) -> int:
     from importlib.resources import files
 
-    from ..denoise import denoise
-    from ..io import read_mesh, write_mesh
-    from ..metrics import msae, vertex_error
+    from meshrepair.denoise.api import denoise
+    from meshrepair.io import read_mesh, write_mesh
+    from meshrepair.metrics import msae, vertex_error
 
     data = files("meshrepair") / "data"
     names = ["fandisk_denoised.ply"] + ([] if args.no_render else ["fandisk_demo.png"])
@@ -157,7 +183,7 @@ def run_demo(args: argparse.Namespace) -> int:
     print(f"  wrote {out}")
     if not args.no_render:
         try:
-            from ..render import compare_figure
+            from meshrepair.render import compare_figure
 
             compare_figure([(noisy.V, noisy.F), (r.V, r.F), (truth.V, truth.F)],
                            ["noisy", "meshrepair", "ground truth"],
@@ -209,8 +235,13 @@ def register(subparsers) -> None:
                     "need no tuning: the noise level is estimated and every parameter is relative "
                     "to the mean edge length. Vertex order and faces are kept.")
     p.add_argument("input", help="noisy mesh (.ply .obj .off .stl)")
-    p.add_argument("output", help="result mesh (.ply recommended); never the input file")
+    p.add_argument("output", nargs="?",
+                   help="result mesh (.ply recommended); never the input file (omitted with "
+                        "--explain)")
     add_denoise_options(p)
+    p.add_argument("--explain", action="store_true",
+                   help="print the plan (what the input reads as, every decision and the rule "
+                        "that made it, the stages) and write nothing")
     p.add_argument("--log", metavar="RUN.json",
                    help="write the iteration history and parameters as JSON")
     p.add_argument("--report", metavar="OUT.html", help="write a self-contained HTML report")

@@ -8,8 +8,10 @@ Examples
 ``meshrepair inpaint head.ply head_fixed.ply --sphere 0.1,0.2,0.3,0.05``
 ``meshrepair inpaint scan.ply scan_fixed.ply --sphere 0.1,0.2,0.3,0.05 --keep-border``
 
-The output is written with :func:`meshrepair.io.write_mesh`; a PLY output gets a per-vertex
-``filled`` property (1 on new vertices, 0 elsewhere).
+The output keeps what the input holds (colours, texture coordinates, materials, per-face
+properties, binary/ASCII and precision; interpolated on the new vertices:
+:func:`meshrepair.io.carry_attributes`); a PLY output gets a per-vertex ``filled`` property
+(1 on new vertices, 0 elsewhere).
 """
 
 from __future__ import annotations
@@ -20,7 +22,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import MeshRepairError
+from meshrepair.errors import MeshRepairError
 
 log = logging.getLogger(__name__)
 
@@ -35,11 +37,11 @@ def _floats(text: str, n: int, what: str) -> list[float]:
     return vals
 
 
-def _write(out: Path, res, log_path: Path | None, extra: dict, force: bool) -> None:
-    from ..io import write_mesh
-    from .common import write_json_log
+def _write(out: Path, m, res, log_path: Path | None, extra: dict, force: bool) -> None:
+    from meshrepair.commands.common import write_json_log
+    from meshrepair.io import write_like_input
 
-    write_mesh(out, res.V, res.F, vertex_attributes={"filled": res.filled_mask}, overwrite=force)
+    write_like_input(out, m, res, extra={"filled": res.filled_mask}, force=force)
     if log_path is not None:
         data = {
             "history": res.history,
@@ -56,11 +58,11 @@ def _write(out: Path, res, log_path: Path | None, extra: dict, force: bool) -> N
 
 
 def _report(args: argparse.Namespace, res, m, report_path: Path | None) -> None:
-    from .common import write_run_report
+    from meshrepair.commands.common import write_run_report
 
     if not args.report:
         return
-    from ..viewer.content import hole_regions
+    from meshrepair.viewer.content import hole_regions
 
     highlight = np.zeros(len(res.F), bool)
     highlight[res.new_faces] = True
@@ -80,10 +82,10 @@ def _report(args: argparse.Namespace, res, m, report_path: Path | None) -> None:
 
 def run_fill(args: argparse.Namespace) -> int:
     """Handler of ``meshrepair fill``; returns the exit code."""
-    from ..fill import fill_holes
-    from ..holes import find_holes
-    from ..io import read_mesh
-    from .common import run_outputs
+    from meshrepair.commands.common import run_outputs
+    from meshrepair.fill import fill_holes
+    from meshrepair.holes import find_holes
+    from meshrepair.io import read_mesh
 
     if args.output is None and not args.list:
         raise MeshRepairError("missing output file: give IN OUT (or --list to only list holes)")
@@ -103,9 +105,10 @@ def run_fill(args: argparse.Namespace) -> int:
 
 def run_inpaint(args: argparse.Namespace) -> int:
     """Handler of ``meshrepair inpaint``; returns the exit code."""
-    from ..fill import inpaint
-    from ..io import read_mesh
-    from .common import run_outputs
+    from meshrepair.commands.common import run_outputs
+    from meshrepair.fill import inpaint
+    from meshrepair.fill.region import resolve_region
+    from meshrepair.io import read_mesh
 
     paths = run_outputs(args, [args.input, args.region], output=args.output)
     m = read_mesh(args.input)
@@ -119,7 +122,7 @@ def _solve_and_write(args: argparse.Namespace, m, paths: tuple, desc: str, solve
     """Run ``solve(callback, hole_progress)`` under progress bars (over holes, then over the
     solve's iterations; none with ``--quiet``), print the per-hole summary, write OUT (and
     ``--log``/``--report``, ``paths`` checked by ``run_outputs``); returns the exit code."""
-    from .common import ProgressBar
+    from meshrepair.commands.common import ProgressBar
 
     out, log_path, report_path = paths
 
@@ -140,7 +143,7 @@ def _solve_and_write(args: argparse.Namespace, m, paths: tuple, desc: str, solve
         if bar is not None:
             bar.close()
     print(res.summary())
-    _write(out, res, log_path, {"input": args.input}, args.force)
+    _write(out, m, res, log_path, {"input": args.input}, args.force)
     print(f"wrote {out} ({len(res.V)} vertices, {len(res.F)} faces, {res.timings['total']:.2f} s)")
     _report(args, res, m, report_path)
     return 0
@@ -230,25 +233,11 @@ def inpaint_options(args: argparse.Namespace) -> dict:
                 keep_border=bool(getattr(args, "keep_border", False)), **_solve_options(args))
 
 
-def resolve_region(region, attribute: str | None, n_vertices: int):
-    """The ``region`` argument of :func:`meshrepair.inpaint` from :func:`inpaint_options`'s
-    ``region``: a mask file read with :func:`meshrepair.io.read_vertex_mask`, or a sphere/box
-    tuple."""
-    from ..io import read_vertex_mask
-
-    if region is None:
-        raise MeshRepairError("inpaint needs a region: --region FILE, --sphere or --box")
-    if isinstance(region, (str, Path)):
-        return read_vertex_mask(region, n_vertices, attribute=attribute)
-    kind, a, b = region
-    return (kind, tuple(a), b if kind == "sphere" else tuple(b))
-
-
 def _common(p: argparse.ArgumentParser) -> None:
     add_solve_options(p)
     p.add_argument("--force", action="store_true", help="overwrite OUT if it exists")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
-    from .common import add_report_option
+    from meshrepair.commands.common import add_report_option
 
     add_report_option(p)
     p.add_argument("--log", default=None, metavar="RUN.json",

@@ -61,7 +61,9 @@ def normalise_argv(parser: argparse.ArgumentParser, argv: list[str]) -> list[str
     2. a numeric list option (``nargs='+'`` with ``type=int``/``float``) keeps only the tokens
        that parse as its type and moves to the end, so positionals after it stay positionals;
     3. ``-v``/``--verbose`` (options of the main parser) move before the command; ``-q``/
-       ``--quiet`` move after it when the command defines it, else before it.
+       ``--quiet`` move after it when the command defines it, else before it;
+    4. for a command with an optional positional (``denoise IN [OUT]``), the positionals move
+       before the options, so that ``denoise a.ply --quiet b.ply`` still reads ``b.ply`` as OUT.
 
     Tokens after a ``--`` separator are left alone.
     """
@@ -74,7 +76,10 @@ def normalise_argv(parser: argparse.ArgumentParser, argv: list[str]) -> list[str
     sub = subs[cmd]
     opts = _options(sub)
     sub_quiet = any(q in opts for q in _QUIET)
-    before, after, tail = [], [], []
+    before, after, tail, positionals = [], [], [], []
+    # argparse fills an optional positional (nargs="?") only from the positionals that stand
+    # together: with one, they are gathered before the options
+    optional_positional = any(not a.option_strings and a.nargs == "?" for a in sub._actions)
     for t in head:
         (after if t in _QUIET and sub_quiet else before).append(t)
     i = 0
@@ -92,6 +97,8 @@ def normalise_argv(parser: argparse.ArgumentParser, argv: list[str]) -> list[str
                 before.append(t)
             elif t in _QUIET and not sub_quiet:
                 before.append(t)
+            elif optional_positional and not t.startswith("-"):
+                positionals.append(t)
             else:
                 after.append(t)
             i += 1
@@ -116,7 +123,7 @@ def normalise_argv(parser: argparse.ArgumentParser, argv: list[str]) -> list[str
                 continue
         after.append(t)
         i += 1
-    return [*before, cmd, *after, *tail]
+    return [*before, cmd, *positionals, *after, *tail]
 
 
 def document_defaults(parser: argparse.ArgumentParser) -> None:

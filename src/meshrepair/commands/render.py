@@ -17,7 +17,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import MeshRepairError
+from meshrepair.errors import MeshRepairError
 
 _COLOR_HELP = (
     "'curvature' (signed mean curvature, default), 'none' (plain grey), a .npy file with one "
@@ -42,14 +42,14 @@ def load_mesh(path: str | os.PathLike) -> LoadedMesh:
     """Read a triangle mesh with :func:`meshrepair.io.read_mesh` (trimesh if that is missing)."""
     p = Path(path)
     try:
-        from ..io import check_input_file
+        from meshrepair.io import check_input_file
 
         check_input_file(p)
     except ImportError:  # meshrepair.io not available
         if not p.is_file():
             raise MeshRepairError(f"mesh file {str(p)!r} does not exist; check the path") from None
     try:
-        from ..io import read_mesh
+        from meshrepair.io import read_mesh
     except ImportError:  # meshrepair.io not available: fall back to trimesh
         read_mesh = None
     if read_mesh is not None:
@@ -71,22 +71,22 @@ def check_output_path(out: str | os.PathLike, inputs: list, suffixes: tuple[str,
                       force: bool = False) -> Path:
     """The common output rule (:func:`meshrepair.commands.common.output_path`) for pictures and
     reports: one of ``suffixes``, never an input, an existing file only with ``force``."""
-    from .common import output_path
+    from meshrepair.commands.common import output_path
 
     return output_path(out, inputs, force=force, suffixes=suffixes)
 
 
 def sharp_edges(V: np.ndarray, F: np.ndarray, threshold: float = 30.0) -> np.ndarray:
     """Sharp-edge mask M_E ``(nE,)`` bool (dihedral angle above ``threshold`` degrees)."""
-    from ..geometry import face_normals, sharp_edge_mask
-    from ..topology import edge_topology
+    from meshrepair.mesh.geometry import face_normals, sharp_edge_mask
+    from meshrepair.mesh.topology import edge_topology
 
     return sharp_edge_mask(face_normals(V, F), edge_topology(F, len(V)), threshold) > 0.5
 
 
 def reference_metrics(V: np.ndarray, F: np.ndarray, V_ref: np.ndarray) -> dict[str, float] | None:
     """MSAE (degrees², face normals over ``F``) and E_V against ``V_ref``; None if nV differs."""
-    from ..metrics import msae, vertex_error
+    from meshrepair.metrics import msae, vertex_error
 
     if V_ref.shape != V.shape:
         return None
@@ -97,7 +97,7 @@ def _color_options(color: str, mesh: LoadedMesh) -> dict:
     if color in ("curvature", "none"):
         return {"color_by": color}
     if color.lower().endswith(".npy"):
-        from ..io import check_input_file
+        from meshrepair.io import check_input_file
 
         p = check_input_file(color, "--color ")
         try:
@@ -167,7 +167,7 @@ def _vec3(text: str, what: str) -> np.ndarray:
 
 def _region_frame(spec: str, mesh: LoadedMesh):
     """Frame of the mask ``spec`` (vertex attribute name or .npy file) on ``mesh``."""
-    from ..framing import frame_faces, frame_vertices
+    from meshrepair.render.framing import frame_faces, frame_vertices
 
     if spec.lower().endswith(".npy"):
         p = Path(spec)
@@ -193,7 +193,7 @@ def _region_frame(spec: str, mesh: LoadedMesh):
 
 def aim_options(args: argparse.Namespace, mesh: LoadedMesh) -> dict:
     """Camera keywords of :func:`meshrepair.render.render_mesh` from the aiming options."""
-    from ..framing import frame_hole
+    from meshrepair.render.framing import frame_hole
 
     framed = [o for o in ("look_at", "frame_hole", "frame_region")
               if getattr(args, o, None) is not None]
@@ -233,7 +233,7 @@ def aim_options(args: argparse.Namespace, mesh: LoadedMesh) -> dict:
 
 def run_render(args: argparse.Namespace) -> int:
     """Handler of ``meshrepair render``; returns the exit code."""
-    from ..render import render_mesh, save_png
+    from meshrepair.render import render_mesh, save_png
 
     color_file = args.color if args.color.lower().endswith(".npy") else None
     out = check_output_path(args.output, [args.input, color_file], (".png",), args.force)
@@ -257,7 +257,7 @@ def run_render(args: argparse.Namespace) -> int:
 
 def run_compare(args: argparse.Namespace) -> int:
     """Handler of ``meshrepair compare``; returns the exit code."""
-    from ..render import compare_figure
+    from meshrepair.render import compare_figure
 
     if len(args.paths) < 2:
         raise MeshRepairError("compare needs at least one mesh and the output: A [B ...] OUT.png")

@@ -14,8 +14,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import MeshRepairError
-from .render import check_output_path, load_mesh, reference_metrics, sharp_edges
+from meshrepair.commands.render import check_output_path, load_mesh, reference_metrics, sharp_edges
+from meshrepair.errors import MeshRepairError
 
 #: per-vertex attributes of the result file shown as masks when they hold 0/1 values
 _MASK_HINTS = ("m_v", "mask", "region", "hole", "inpaint")
@@ -26,7 +26,7 @@ def _load_log(path: str | None) -> dict:
     ``history``, ``parameters``, ``timings``, ``metrics``, ``holes`` (per-hole records)."""
     if path is None:
         return {}
-    from ..io import check_input_file
+    from meshrepair.io import check_input_file
 
     p = check_input_file(path, "--log ")
     try:
@@ -63,10 +63,10 @@ def _attribute_masks(attrs: dict, n_vertices: int) -> dict[str, np.ndarray]:
 
 def run_report(args: argparse.Namespace) -> int:
     """Handler of ``meshrepair report``; returns the exit code."""
-    from ..geometry import mean_edge_length
-    from ..metrics import distances
-    from ..report import write_report
-    from ..topology import boundary_loops
+    from meshrepair.mesh.geometry import mean_edge_length
+    from meshrepair.mesh.topology import boundary_loops
+    from meshrepair.metrics import distances
+    from meshrepair.report.page import write_report
 
     out = check_output_path(
         args.output, [args.result, args.input, args.reference, args.log], (".html", ".htm"),

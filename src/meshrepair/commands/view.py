@@ -11,19 +11,19 @@ import argparse
 import time
 from pathlib import Path
 
-from ..errors import MeshRepairError
+from meshrepair.errors import MeshRepairError
 
 _SUFFIXES = (".html", ".htm")
 
 
 def run_view(args: argparse.Namespace) -> int:
     """Handler of ``meshrepair view``; returns the exit code."""
-    from ..geometry import edge_lengths
-    from ..topology import boundary_loops, edge_topology
-    from ..viewer import DEFAULT_FACE_BUDGET, write_viewer
-    from ..viewer.content import mesh_pane, mesh_regions
-    from .common import output_path
-    from .render import load_mesh, reference_metrics
+    from meshrepair.commands.common import output_path
+    from meshrepair.commands.render import load_mesh, reference_metrics
+    from meshrepair.mesh.geometry import edge_lengths
+    from meshrepair.mesh.topology import boundary_loops, edge_topology
+    from meshrepair.viewer import DEFAULT_FACE_BUDGET, write_viewer
+    from meshrepair.viewer.content import mesh_pane, mesh_regions
 
     if args.output is None:
         raise MeshRepairError("missing output: give -o VIEW.html")

@@ -9,7 +9,8 @@ Pipeline of :func:`fill_holes`:
    loop, with interior edges matching the loop's edge length and a membrane initial position
    (:func:`meshrepair.holes.enclose_holes`). The new vertices form the region ``S_D``. A hole
    whose patch intersects the surface (faired and membrane) is enclosed again with the next
-   method of :data:`ENCLOSE_ORDER` (Liepa's minimum-weight triangulation, faired, then on its
+   method of :data:`meshrepair.fill.options.ENCLOSE_ORDER` (Liepa's minimum-weight triangulation,
+   faired, then on its
    own surface) before it is refused.
 3. *Initial position* (``initial``): ``"bilaplacian"`` (default) moves the new vertices to the
    bi-Laplacian (thin-plate) fairing with the surrounding 1-ring as Dirichlet data, which continues
@@ -17,7 +18,8 @@ Pipeline of :func:`fill_holes`:
    ``triharmonic=True`` (default) the screened triharmonic fairing (two rings of the surround as
    data, curvature continuity; :mod:`meshrepair.holes.triharmonic`) is computed too and kept for
    each hole whose seam angle it lowers.
-4. *Repair solve* with the shared :class:`~meshrepair.solver.ADMMSolver`: ``M_V = 0`` on the new
+4. *Repair solve* with the shared :class:`~meshrepair.model.solver.ADMMSolver`: ``M_V = 0`` on the
+new
    vertices, ``M_E`` forced to 0 (edge-Willmore) on every edge of a new face (the patch interior
    and the loop itself, so the patch joins its surround smoothly), the dihedral-threshold mask
    elsewhere.
@@ -28,8 +30,8 @@ Pipeline of :func:`fill_holes`:
      ``"none"``: every free edge is edge-Willmore, which is what the paper prescribes inside
      ``S_D``; fixed faces far from the patch contribute constants only.
    * ``denoise=True`` (fill + denoise): the whole mesh is solved with the denoising schedule of
-     :func:`meshrepair.denoise.default_stages` and λ from the estimated noise
-     (:func:`meshrepair.denoise.lambda_from_noise`); ``M_V = 1`` outside the patches.
+     :func:`meshrepair.denoise.api.default_stages` and λ from the estimated noise
+     (:func:`meshrepair.denoise.api.lambda_from_noise`); ``M_V = 1`` outside the patches.
 
 :func:`inpaint` first removes a damaged region (its faces), then fills the holes that this opens.
 """
@@ -40,11 +42,11 @@ from __future__ import annotations
 # checks), patches (patch bookkeeping and measurements), place (enclosing, initial position,
 # intersection and seam retries), core (the repair solve shared by both tasks), filling
 # (fill_holes), region (the damaged region of inpaint), inpainting (inpaint)
-from .core import _fill_core  # noqa: F401
-from .filling import fill_holes
-from .inpainting import inpaint
-from .options import INITIAL_MODES, SOLVE_OPTIONS, _check_options  # noqa: F401
-from .patches import (  # noqa: F401
+from meshrepair.fill.core import _fill_core  # noqa: F401
+from meshrepair.fill.filling import fill_holes
+from meshrepair.fill.inpainting import inpaint
+from meshrepair.fill.options import INITIAL_MODES, SOLVE_OPTIONS, _check_options  # noqa: F401
+from meshrepair.fill.patches import (  # noqa: F401
     _blocks,
     _crease_edges,
     _drop_patches,
@@ -55,7 +57,7 @@ from .patches import (  # noqa: F401
     _seam_angle,
     _sharp_vertices,
 )
-from .place import (  # noqa: F401
+from meshrepair.fill.place import (  # noqa: F401
     _METHOD_NAMES,
     BLEND_STEPS,
     SEAM_RETRY_FACTOR,
@@ -63,15 +65,8 @@ from .place import (  # noqa: F401
     _enclose_methods,
     _place_patches,
 )
-from .region import _pinched, _remove_region, region_mask  # noqa: F401
-from .result import FillResult
+from meshrepair.fill.region import _pinched, _remove_region, region_mask  # noqa: F401
+from meshrepair.fill.result import FillResult
 
 __all__ = ["FillResult", "fill_holes", "inpaint", "region_mask"]
 
-ENCLOSE_ORDER: tuple[str, ...] = ("auto", "liepa")
-"""Enclosing methods (:func:`meshrepair.holes.enclose_loop`) in the order they are tried on a
-hole: the next one when the patch of the previous one intersects the surface both faired and
-unfaired. ``"auto"``: planar projection + membrane; ``"liepa"``: Liepa's minimum-weight
-triangulation refined on its own surface (loops up to :data:`meshrepair.holes.LIEPA_MAX_LOOP`
-vertices). Planar first: Liepa first was less accurate after fairing on the smooth benchmark
-cases (docs/holes.md, section 6)."""

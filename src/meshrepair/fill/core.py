@@ -12,12 +12,19 @@ from collections.abc import Callable
 
 import numpy as np
 
-from ..holes import self_intersections
-from ..solver import ADMMSolver, SolverOptions, Stage
-from ..topology import edge_topology
-from .patches import _blocks, _crease_edges, _edge_ids, _finite_rows, _intersecting, _ring_faces
-from .place import _place_patches
-from .result import FillResult
+from meshrepair.fill.patches import (
+    _blocks,
+    _crease_edges,
+    _edge_ids,
+    _finite_rows,
+    _intersecting,
+    _ring_faces,
+)
+from meshrepair.fill.place import _place_patches
+from meshrepair.fill.result import FillResult
+from meshrepair.holes import self_intersections
+from meshrepair.mesh.topology import edge_topology
+from meshrepair.model.solver import ADMMSolver, SolverOptions, Stage
 
 log = logging.getLogger("meshrepair.fill")
 
@@ -31,7 +38,7 @@ def _fill_core(V: np.ndarray, F: np.ndarray, holes, skip: dict[int, str], *, den
                creases: bool = True, curvature: bool = True,
                triharmonic: bool = True, known_holes: set[int] | frozenset[int] = frozenset(),
                notes: dict[int, str] | None = None) -> FillResult:
-    from ..geometry import face_normals, sharp_edge_mask
+    from meshrepair.mesh.geometry import face_normals, sharp_edge_mask
 
     t0 = time.perf_counter()
     nV, nF = len(V), len(F)
@@ -62,8 +69,8 @@ def _fill_core(V: np.ndarray, F: np.ndarray, holes, skip: dict[int, str], *, den
     M_E[crease_e] = True
     V_before = V1
     if denoise:
-        from ..denoise import default_stages, lambda_from_noise
-        from ..noise import estimate_noise
+        from meshrepair.model.noise import estimate_noise
+        from meshrepair.model.schedule import default_stages, lambda_from_noise
 
         gamma = estimate_noise(V, F)
         lam_used = lambda_from_noise(gamma) if lam is None else float(lam)
@@ -118,7 +125,7 @@ def _fill_core(V: np.ndarray, F: np.ndarray, holes, skip: dict[int, str], *, den
             if rep.n_intersections:
                 log.warning("hole %d: %d face pairs of the patch intersect the mesh", i,
                             rep.n_intersections)
-    from .quality import hole_quality
+    from meshrepair.fill.quality import hole_quality
 
     hole_quality(V1, F1, reports, nV, nF)
     return FillResult(

@@ -5,11 +5,11 @@ from __future__ import annotations
 import logging
 from collections.abc import Callable, Sequence
 
-from ..holes import select_holes
-from ..holes.budget import check_budget
-from .core import _fill_core
-from .options import _check_options, _solve_options
-from .result import FillResult
+from meshrepair.fill.core import _fill_core
+from meshrepair.fill.options import _check_options, _solve_options
+from meshrepair.fill.result import FillResult
+from meshrepair.holes import select_holes
+from meshrepair.holes.budget import check_budget
 
 log = logging.getLogger("meshrepair.fill")
 
@@ -88,7 +88,8 @@ def fill_holes(
     check : bool
         Refuse patches that would intersect or lie on the surface, and count intersections of the
         final patches (``HoleReport.n_intersections``). A patch that intersects is tried
-        faired, then unfaired, then with the next enclosing method of :data:`ENCLOSE_ORDER`
+        faired, then unfaired, then with the next enclosing method of
+        :data:`meshrepair.fill.options.ENCLOSE_ORDER`
         (``HoleReport.reason`` says which was kept: e.g. ``"plane"``, ``"plane, membrane"``,
         ``"liepa"``, ``"liepa, unfaired"``) before the hole is refused.
     callback : called with each ADMM history entry.
@@ -118,16 +119,17 @@ def fill_holes(
     Raises
     ------
     MeshRepairError
-        For invalid meshes (:func:`meshrepair.validate.check_mesh`) or options (e.g. a hole index
+        For invalid meshes (:func:`meshrepair.mesh.validate.check_mesh`) or options (e.g. a hole
+        index
         that does not exist, a non-finite or out-of-range number), or when the selected holes
         would need more than :data:`meshrepair.holes.budget.MAX_NEW_FACES` new faces (estimated
         before any work; the message gives the count).
     """
     opts = _solve_options(locals())
-    from ..holes import _find_holes
-    from ..holes.border import ENCLOSED, classify_loops
-    from ..io import as_arrays
-    from ..validate import check_mesh
+    from meshrepair.holes import _find_holes
+    from meshrepair.holes.border import ENCLOSED, classify_loops
+    from meshrepair.mesh.array_contract import as_arrays
+    from meshrepair.mesh.validate import check_mesh
 
     V, F = as_arrays(V, F)
     check_mesh(V, F, name="input mesh")

@@ -7,12 +7,12 @@ from collections.abc import Callable
 
 import numpy as np
 
-from ..errors import MeshRepairError
-from ..holes.budget import check_budget
-from .core import _fill_core
-from .options import _check_options, _solve_options
-from .region import _remove_region, region_mask
-from .result import FillResult
+from meshrepair.errors import MeshRepairError
+from meshrepair.fill.core import _fill_core
+from meshrepair.fill.options import _check_options, _solve_options
+from meshrepair.fill.region import _remove_region, region_mask
+from meshrepair.fill.result import FillResult
+from meshrepair.holes.budget import check_budget
 
 log = logging.getLogger("meshrepair.fill")
 
@@ -84,9 +84,9 @@ def inpaint(
         For an invalid mesh or region, an empty region, or a region covering the whole mesh.
     """
     opts = _solve_options(locals())
-    from ..holes import _find_holes
-    from ..io import as_arrays
-    from ..validate import check_mesh
+    from meshrepair.holes import _find_holes
+    from meshrepair.mesh.array_contract import as_arrays
+    from meshrepair.mesh.validate import check_mesh
 
     V, F = as_arrays(V, F)
     check_mesh(V, F, name="input mesh")
@@ -98,7 +98,7 @@ def inpaint(
                               "position and size (coordinates are in mesh units)")
     if not isinstance(keep_border, (bool, np.bool_)):
         raise MeshRepairError(f"keep_border must be True or False, got {keep_border!r}")
-    from ..topology import edge_topology
+    from meshrepair.mesh.topology import edge_topology
 
     topo0 = edge_topology(F, nV)
     on_border = np.zeros(nV, bool)
@@ -149,7 +149,7 @@ def inpaint(
                              "or a region away from the border")
             touched.append(h.index)
     # removal that cuts a component into several large parts: refuse the loops of those parts
-    from ..topology import connected_components
+    from meshrepair.mesh.topology import connected_components
 
     lab0 = connected_components(F, nV)[1]
     lab2 = connected_components(F2, len(V2))[1]

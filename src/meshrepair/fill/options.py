@@ -5,8 +5,8 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 
-from ..errors import MeshRepairError
-from ..holes.budget import check_fill_options
+from meshrepair.errors import MeshRepairError
+from meshrepair.holes.budget import check_fill_options
 
 INITIAL_MODES = ("bilaplacian", "harmonic")
 
@@ -33,3 +33,12 @@ def _check_options(opts: dict) -> dict:
     check_fill_options(**{k: opts[k] for k in ("edge_length", "lam", "th", "a", "max_iter", "tol",
                                                 "rings", "relax", "inner_iters")})
     return {**opts, "max_iter": int(opts["max_iter"]), "rings": int(opts["rings"])}
+
+
+ENCLOSE_ORDER: tuple[str, ...] = ("auto", "liepa")
+"""Enclosing methods (:func:`meshrepair.holes.enclose_loop`) in the order they are tried on a
+hole: the next one when the patch of the previous one intersects the surface both faired and
+unfaired. ``"auto"``: planar projection + membrane; ``"liepa"``: Liepa's minimum-weight
+triangulation refined on its own surface (loops up to :data:`meshrepair.holes.LIEPA_MAX_LOOP`
+vertices). Planar first: Liepa first was less accurate after fairing on the smooth benchmark
+cases (docs/holes.md, section 6)."""

@@ -8,8 +8,8 @@ import logging
 
 import numpy as np
 
-from ..holes import HoleReport, self_intersections
-from ..topology import edge_topology
+from meshrepair.holes import HoleReport, self_intersections
+from meshrepair.mesh.topology import edge_topology
 
 log = logging.getLogger("meshrepair.fill")
 
@@ -80,7 +80,7 @@ def _seam_angle(V: np.ndarray, F: np.ndarray, faces: np.ndarray, nF: int, ring: 
     """Mean dihedral angle (degrees) across the loop edges of the patch ``faces`` (edges between
     one of them and an original face); with ``ring``, also that of the original edges within 3
     rings of the patch."""
-    from ..geometry import dihedral_angles, face_normals
+    from meshrepair.mesh.geometry import dihedral_angles, face_normals
 
     near_v = np.zeros(len(V), bool)
     near_v[F[faces].ravel()] = True
@@ -109,7 +109,7 @@ def _seam_angle(V: np.ndarray, F: np.ndarray, faces: np.ndarray, nF: int, ring: 
 
 def _sharp_vertices(V: np.ndarray, F: np.ndarray, th: float, nV: int) -> np.ndarray:
     """(nV,) bool: vertices on an edge with dihedral angle above ``th``."""
-    from ..geometry import face_normals, sharp_edge_mask
+    from meshrepair.mesh.geometry import face_normals, sharp_edge_mask
 
     topo = edge_topology(F, nV)
     m = sharp_edge_mask(face_normals(V, F), topo, th).astype(bool)

@@ -1,7 +1,7 @@
 """Placement of the patches before the repair solve (steps 2-3 of :mod:`meshrepair.fill`):
 enclosing, the initial position (thin plate, triharmonic candidate), and the intersection and
 seam checks that retry a hole with a blend of the fairing, its unfaired surface or the next
-enclosing method of :data:`meshrepair.fill.ENCLOSE_ORDER`, or refuse it."""
+enclosing method of :data:`meshrepair.fill.options.ENCLOSE_ORDER`, or refuse it."""
 
 from __future__ import annotations
 
@@ -11,11 +11,7 @@ from collections.abc import Callable
 
 import numpy as np
 
-from ..holes import LIEPA_MAX_LOOP, HoleReport, enclose_holes, fair_vertices, self_intersections
-from ..holes.creases import find_crease_routes
-from ..holes.fairing import LIEPA_COT_RANGE
-from ..holes.triharmonic import fair_triharmonic
-from .patches import (
+from meshrepair.fill.patches import (
     _blocks,
     _crease_edges,
     _drop_patches,
@@ -24,6 +20,16 @@ from .patches import (
     _seam_angle,
     _sharp_vertices,
 )
+from meshrepair.holes import (
+    LIEPA_MAX_LOOP,
+    HoleReport,
+    enclose_holes,
+    fair_vertices,
+    self_intersections,
+)
+from meshrepair.holes.creases import find_crease_routes
+from meshrepair.holes.fairing import LIEPA_COT_RANGE
+from meshrepair.holes.triharmonic import fair_triharmonic
 
 log = logging.getLogger("meshrepair.fill")
 
@@ -33,7 +39,7 @@ _METHOD_NAMES = {"auto": "planar projection", "liepa": "minimum-weight triangula
 def _enclose_methods(hole) -> list[str]:
     """Enclosing methods to try on ``hole``, in order (``"liepa"`` only up to
     :data:`meshrepair.holes.LIEPA_MAX_LOOP` boundary vertices)."""
-    from . import ENCLOSE_ORDER  # looked up on each call: meshrepair.fill.ENCLOSE_ORDER may be set
+    from meshrepair.fill.options import ENCLOSE_ORDER  # read on each call: a caller may set it
 
     out = [m for m in ENCLOSE_ORDER if m != "liepa" or hole.n_boundary <= LIEPA_MAX_LOOP]
     return out or ["auto"]
@@ -46,10 +52,10 @@ SEAM_RETRY_FACTOR = 1.5
 SEAM_RETRY_MARGIN = 3.0
 """A planar patch whose mean dihedral angle across its loop exceeds
 ``SEAM_RETRY_FACTOR * surround + SEAM_RETRY_MARGIN`` degrees (surround: the original edges within
-3 rings) is enclosed again by Liepa's triangulation and the smoother seam kept. Measured on the
-peers benchmark (docs/holes.md): rocker_arm r=8 seams 25.3° / 19.6° vs surround 7.9° / 8.4°
-(Liepa: 8.6° / 5.8°, patch distance 0.62× / 0.59×), trim_star crease r=8 14.4° vs 5.3° (Liepa
-7.0°, 0.85×); unchanged below the rule: spot (1.7° vs 1.6°), twelve (5.6° vs 2.1°)."""
+3 rings) is enclosed again by Liepa's triangulation and the smoother seam kept. On the peers
+benchmark (docs/holes.md) the seams the rule catches read 2-3× their surround (14-25° against
+5-8°) and Liepa's enclosure brings them to 6-9°; seams below the rule are left as they
+are."""
 
 
 def _place_patches(V: np.ndarray, F: np.ndarray, holes, skip: dict[int, str], *, initial: str,

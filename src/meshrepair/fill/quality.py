@@ -19,8 +19,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..holes import HoleReport
-from .patches import _blocks, _seam_angle
+from meshrepair.fill.patches import _blocks, _seam_angle
+from meshrepair.holes import HoleReport
 
 SEAM_CHECK_FACTOR = 2.0
 SEAM_CHECK_MARGIN = 5.0
@@ -35,8 +35,9 @@ def hole_quality(V: np.ndarray, F: np.ndarray, reports: list[HoleReport], nV: in
                  nF: int) -> None:
     """Set ``HoleReport.quality`` of every filled hole (see the module docstring); ``nV, nF``:
     the number of original vertices and faces (the patches follow them)."""
-    from ..geometry import mean_curvature, mean_edge_length
-    from ..topology import edge_topology
+    from meshrepair.mesh.geometry import mean_edge_length
+    from meshrepair.mesh.operators import mean_curvature
+    from meshrepair.mesh.topology import edge_topology
 
     blocks = _blocks(reports, nV, nF)
     if not blocks:

@@ -4,10 +4,12 @@ simple loops."""
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 
-from ..errors import MeshRepairError
-from ..topology import edge_topology
+from meshrepair.errors import MeshRepairError
+from meshrepair.mesh.topology import edge_topology
 
 
 def region_mask(V: np.ndarray, region) -> np.ndarray:
@@ -48,7 +50,7 @@ def region_mask(V: np.ndarray, region) -> np.ndarray:
         raise MeshRepairError(
             f"invalid region {region!r}: use ('sphere', (x, y, z), radius > 0) or "
             "('box', (x0, y0, z0), (x1, y1, z1)) with x0 <= x1, y0 <= y1, z0 <= z1")
-    from ..io import read_vertex_mask
+    from meshrepair.io import read_vertex_mask
 
     return read_vertex_mask(np.asarray(region), nV)
 
@@ -64,7 +66,7 @@ def _remove_region(F: np.ndarray, nV: int, vmask: np.ndarray, max_rounds: int = 
     removed area around them (islands inside the region). Faces marked in ``protect`` (bool
     ``(nF,)``) are never removed.
     """
-    from ..validate import check_mesh  # noqa: F401  (validated by the caller)
+    from meshrepair.mesh.validate import check_mesh  # noqa: F401  (validated by the caller)
 
     keep_always = np.zeros(len(F), bool) if protect is None else np.asarray(protect, bool)
     removed = vmask[F].any(axis=1) & ~keep_always
@@ -98,7 +100,7 @@ def _remove_region(F: np.ndarray, nV: int, vmask: np.ndarray, max_rounds: int = 
         if not changed:
             break
     # islands: kept components cut off by the removal and smaller than the removed area
-    from ..topology import connected_components
+    from meshrepair.mesh.topology import connected_components
 
     keep = np.flatnonzero(~removed)
     if len(keep):
@@ -154,3 +156,17 @@ def _pinched(F: np.ndarray, nV: int) -> np.ndarray:
     gv = np.empty(n, np.int64)
     gv[lab] = F.ravel()
     return np.bincount(gv, minlength=nV) > 1
+
+
+def resolve_region(region, attribute: str | None, n_vertices: int):
+    """The ``region`` argument of :func:`meshrepair.inpaint` from :func:`inpaint_options`'s
+    ``region``: a mask file read with :func:`meshrepair.io.read_vertex_mask`, or a sphere/box
+    tuple."""
+    from meshrepair.io.masks import read_vertex_mask
+
+    if region is None:
+        raise MeshRepairError("inpaint needs a region: --region FILE, --sphere or --box")
+    if isinstance(region, (str, Path)):
+        return read_vertex_mask(region, n_vertices, attribute=attribute)
+    kind, a, b = region
+    return (kind, tuple(a), b if kind == "sphere" else tuple(b))

@@ -7,7 +7,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..holes import HoleReport
+from meshrepair.holes import HoleReport
 
 __all__ = ["FillResult"]
 
@@ -30,7 +30,7 @@ class FillResult:
     edges : (nE, 2) int64
         The edges ``M_E`` refers to (``edge_topology(F).edges``).
     history : list of dict
-        One entry per ADMM iteration (see :class:`meshrepair.solver.SolverResult`).
+        One entry per ADMM iteration (see :class:`meshrepair.model.solver.SolverResult`).
     holes : list of HoleReport
         One report per boundary loop of the (cut) input: filled or skipped, and why.
     new_vertices : (m,) int64
@@ -103,7 +103,7 @@ class FillResult:
             lines.append(f"  hole {h.index}: {h.n_boundary} boundary edges, length "
                          f"{h.length:.6g}: {what}")
             if h.quality:
-                from .quality import quality_line
+                from meshrepair.fill.quality import quality_line
 
                 lines.append(f"    quality: {quality_line(h.quality)}")
             if h.note:

@@ -7,7 +7,8 @@ Subpackage layout (one concept per module): :mod:`.detect` (loops, selection), :
 patches), :mod:`.fairing`, :mod:`.triharmonic` (curvature-continuous fairing), :mod:`.intersect`.
 
 A *hole* is a simple closed boundary loop. :func:`find_holes` takes the loops of
-:func:`meshrepair.topology.boundary_loops` (which follow the face orientation) and splits a loop
+:func:`meshrepair.mesh.topology.boundary_loops` (which follow the face orientation) and splits a
+loop
 that passes twice through a pinched vertex (two holes touching at one vertex) into simple loops,
 so every hole visits each of its vertices once.
 
@@ -49,15 +50,15 @@ to check patches.
 
 from __future__ import annotations
 
-from .._kernels import HAVE_NUMBA
-from ._geom2d import MIN_ANGLE, Patch
-from .detect import Hole, HoleReport, _find_holes, find_holes, select_holes
-from .enclose import _opposite_points, enclose_holes
-from .fairing import fair_vertices
-from .intersect import self_intersections
-from .liepa import LIEPA_MAX_LOOP, min_weight_triangulation
-from .liepa_refine import LIEPA_CREASE
-from .planar import ENCLOSE_METHODS, enclose_loop
+from meshrepair._kernels import HAVE_NUMBA
+from meshrepair.holes._geom2d import MIN_ANGLE, Patch
+from meshrepair.holes.detect import Hole, HoleReport, _find_holes, find_holes, select_holes
+from meshrepair.holes.enclose import _opposite_points, enclose_holes
+from meshrepair.holes.fairing import fair_vertices
+from meshrepair.holes.intersect import self_intersections
+from meshrepair.holes.liepa import LIEPA_MAX_LOOP, min_weight_triangulation
+from meshrepair.holes.liepa_refine import LIEPA_CREASE
+from meshrepair.holes.planar import ENCLOSE_METHODS, enclose_loop
 
 __all__ = [
     "ENCLOSE_METHODS",

@@ -7,7 +7,7 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
-from ..topology import edge_topology
+from meshrepair.mesh.topology import edge_topology
 
 
 def _free_mask(V, F, free) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

@@ -8,7 +8,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import scipy.sparse as sp
 
-from ..errors import MeshRepairError
+from meshrepair.errors import MeshRepairError
 
 MIN_ANGLE = 28.0
 """Minimum angle (degrees) asked of the 2-D constrained Delaunay triangulation."""

@@ -12,9 +12,9 @@ surface with a second sheet (a pillow) or cut through it. :func:`find_borders` c
   region of that perimeter) is at least :data:`BORDER_ISO_RATIO` ``A``.
 
 Why these numbers (measured on the shared meshes with real holes; ratios ``va/A``, ``L²/4πA``):
-the borders of the two open scans are at (0.73, 8.7) (kinect_pyramid, 565 edges) and (0.73, 5.6)
-(rabbit_scan, 1104 edges); the holes of closed models are at most (0.37, 0.73) (nicolo's cut base,
-253 edges, which we fill), camelhead's neck (0.069, 0.080), bunny's largest hole (0.005, 0.018).
+the borders of the two open scans are at (0.73, 8.7) and (0.73, 5.6) (565 and 1104 edges); the
+holes of closed models are at most (0.37, 0.73) (a statue's cut base, 253 edges, which is
+filled), the others far below (a cut neck (0.069, 0.080), a small scan hole (0.005, 0.018)).
 A crack running all the way round a sphere has ``L² / 4πA = 1``, a single-view height-field scan
 of a square has ``va / A ≈ 1`` and ``L² / 4πA ≥ 4/π``. Both thresholds leave a factor of at least
 1.35 on either side on the shared meshes.
@@ -37,8 +37,8 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from ._geom2d import _vector_area
-from .detect import Hole
+from meshrepair.holes._geom2d import _vector_area
+from meshrepair.holes.detect import Hole
 
 BORDER_AREA_RATIO = 0.5
 """A loop whose vector area is at least this fraction of its component's area is a border."""
@@ -101,8 +101,8 @@ def classify_loops(V: np.ndarray, F: np.ndarray, holes: Sequence[Hole]
     """
     if not holes:
         return {}, {}, {}
-    from ..topology import connected_components
-    from .closure import loop_enclosure
+    from meshrepair.holes.closure import loop_enclosure
+    from meshrepair.mesh.topology import connected_components
 
     enclosure = loop_enclosure(V, F, holes)
     notes: dict[int, str] = {}

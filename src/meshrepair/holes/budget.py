@@ -5,7 +5,7 @@ inequality); meshed with equilateral triangles of side ``h`` it has about
 ``L² / (4π · (√3/4) h²)`` triangles. :func:`estimate_patch_faces` returns that bound; fill_holes
 and inpaint refuse (:class:`~meshrepair.errors.MeshRepairError`, with the count) selections whose
 total exceeds :data:`MAX_NEW_FACES`, before building anything: an ``edge_length`` of 1e-4 on a
-unit-size mesh asked for tens of millions of triangles and ran out of memory (issue 11).
+unit-size mesh asks for tens of millions of triangles and runs out of memory.
 """
 
 from __future__ import annotations
@@ -14,8 +14,8 @@ from collections.abc import Iterable
 
 import numpy as np
 
-from ..errors import MeshRepairError
-from .detect import Hole
+from meshrepair.errors import MeshRepairError
+from meshrepair.holes.detect import Hole
 
 MAX_NEW_FACES = 2_000_000
 """Largest number of new faces (estimated) fill_holes / inpaint agree to create in one call

@@ -24,7 +24,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from .detect import Hole
+from meshrepair.holes.detect import Hole
 
 N_SAMPLES = 24
 """Faces of each component whose centroids, moved in along the face normal, are the points
@@ -83,8 +83,8 @@ def loop_enclosure(V: np.ndarray, F: np.ndarray, holes: Sequence[Hole]) -> dict[
     """
     if not holes:
         return {}
-    from ..geometry import face_normals, mean_edge_length
-    from ..topology import connected_components
+    from meshrepair.mesh.geometry import face_normals, mean_edge_length
+    from meshrepair.mesh.topology import connected_components
 
     _, comp = connected_components(F, len(V))
     fcomp = comp[F[:, 0]]

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .crease_ends import (
+from meshrepair.holes.crease_ends import (
     CHAIN_PER_GAP,
     CORNER_TOL,
     MIN_CORNER,
@@ -77,8 +77,8 @@ def _exact_corner(P: np.ndarray, ends: list[CreaseEnd]):
     """A corner of three or more creases inside the hole, two of which arrive straight: two
     non-parallel ends whose lines meet in front of both (closest points within
     :data:`EXACT_CORNER_TOL` of the distance), and every other end whose direction points at
-    that point within :data:`EXACT_CORNER_ARM` (a curved crease reaching the corner, as on
-    fandisk). Returns (end indices, corner point) for the group with the most ends (then the
+    that point within :data:`EXACT_CORNER_ARM` (a curved crease reaching the corner).
+    Returns (end indices, corner point) for the group with the most ends (then the
     tightest meeting), or None when no group has three ends. Two tangent lines of one circular
     crease also meet, which is why two ends alone never make a corner here."""
     best = None
@@ -124,8 +124,8 @@ def _exact_corner(P: np.ndarray, ends: list[CreaseEnd]):
                 continue  # a straight crease through the hole: a pair (T-junction), not here
             log.debug("exact corner %s at %s: spread %.3f", grp, c, spread)
             # the two lines that meet must be straight chains, reliable that far into the hole
-            # (fandisk: a curved crease's tangent line also meets a straight one near the
-            # corner); then the arms that turn least
+            # (a curved crease's tangent line also meets a straight one near the corner);
+            # then the arms that turn least
             reach = min(1.0, ea.straight_length / t, eb.straight_length / u)
             key = (len(grp), round(reach, 1), -spread)
             if best is None or key > best[0]:
@@ -195,10 +195,10 @@ def _kinked_pairs(P: np.ndarray, ends: list[CreaseEnd]) -> list[tuple[int, int]]
     joins two different creases); two ends of one chain (the loop cutting a crease at two
     neighbouring vertices, :attr:`CreaseEnd.chain_id`) are never both used; two ends whose
     lines meet in front of both (:func:`_lines_meet_ahead`) are two creases of a corner whose
-    third crease was not found (fandisk creases r=16), not one crease. Routed straight:
-    on trim_star crease r=8 the crease arriving at one end bends by 58° there (its chain
-    outside zigzags by 15-30° per edge), while inside the hole it turns by 24° in all."""
-    from ._geom2d import _vector_area
+    third crease was not found, not one crease. Routed straight: a crease arriving at an end
+    can bend by 50-60° there (its chain outside zigzags by 15-30° per edge) while inside the
+    hole it turns by a few tens of degrees in all."""
+    from meshrepair.holes._geom2d import _vector_area
 
     va = _vector_area(P)
     nva = float(np.linalg.norm(va))
@@ -209,7 +209,7 @@ def _kinked_pairs(P: np.ndarray, ends: list[CreaseEnd]) -> list[tuple[int, int]]
     if nh is not None:
         from matplotlib.path import Path as MPath
 
-        from .planar import _plane_frame
+        from meshrepair.holes._geom2d import _plane_frame
 
         e1, e2 = _plane_frame(-nh)
         Q = np.c_[(P - P.mean(axis=0)) @ e1, (P - P.mean(axis=0)) @ e2]

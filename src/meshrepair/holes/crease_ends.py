@@ -35,7 +35,7 @@ statue near a cut base) are not extended across a large hole."""
 
 MIN_CORNER = 3
 """Crease ends needed for a corner: three creases meeting (a box corner); two lines that nearly
-meet are too often two unrelated features of an organic surface (measured on nefertiti)."""
+meet are too often two unrelated features of an organic surface (docs/holes.md)."""
 
 PAIR_MAX_TILT = 30.0
 """Largest angle (degrees) between a paired crease's direction and the plane the hole spans
@@ -44,9 +44,8 @@ flat cut (a statue's base) are not paired."""
 
 MIN_CHAIN_EDGES = 8.0
 """A crease end needs a chain at least this many mean loop edge lengths long: the creases of the
-CAD meshes in the peers benchmark run 20-66 edges before turning back, the features of
-nefertiti that were paired across a hole 4-8 (continuing them made that patch worse: patch
-distance 0.500 vs 0.381 ×1e-3)."""
+CAD meshes in the peers benchmark run 20-66 edges before turning back, the short features of
+an organic surface 4-8 (continuing those across a hole makes the patch worse)."""
 
 MAX_CHAIN = 64
 """Edges walked back along a chain (enough evidence for any gap up to 256 edges)."""
@@ -137,8 +136,8 @@ class SharpGraph:
     """Sharp edges of a mesh (dihedral angle above ``th``) as an adjacency structure."""
 
     def __init__(self, V: np.ndarray, F: np.ndarray, th: float):
-        from ..geometry import dihedral_angles, face_normals
-        from ..topology import edge_topology
+        from meshrepair.mesh.geometry import dihedral_angles, face_normals
+        from meshrepair.mesh.topology import edge_topology
 
         topo = edge_topology(F, len(V))
         N = face_normals(V, F)

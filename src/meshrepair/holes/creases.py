@@ -45,7 +45,7 @@ import logging
 
 import numpy as np
 
-from .crease_corners import (  # noqa: F401  (re-exported)
+from meshrepair.holes.crease_corners import (  # noqa: F401  (re-exported)
     EXACT_CORNER_ARM,
     EXACT_CORNER_TOL,
     KINKED_PAIR_TURN,
@@ -57,7 +57,7 @@ from .crease_corners import (  # noqa: F401  (re-exported)
     _lines_meet_ahead,
     _twin_corners,
 )
-from .crease_ends import (  # noqa: F401  (re-exported)
+from meshrepair.holes.crease_ends import (  # noqa: F401  (re-exported)
     CHAIN_PER_GAP,
     CORNER_TOL,
     MAX_CHAIN,
@@ -116,7 +116,7 @@ def route_creases(V: np.ndarray, loop: np.ndarray, ends: list[CreaseEnd]) -> Cre
                 continue
             if min(ca, cb) > cos_turn:
                 cand.append((ca + cb, a, b))
-    from ._geom2d import _vector_area
+    from meshrepair.holes._geom2d import _vector_area
 
     va = _vector_area(P)
     nva = float(np.linalg.norm(va))
@@ -141,7 +141,7 @@ def route_creases(V: np.ndarray, loop: np.ndarray, ends: list[CreaseEnd]) -> Cre
         curves.append(np.stack([p0, m * ea.direction, p1, -m * eb.direction]))
         kinds.append("pair")
     rest = [e for i, e in enumerate(ends) if i not in used]
-    # T-junctions: a leftover crease whose line meets a paired crease ends on it (fandisk: a
+    # T-junctions: a leftover crease whose line meets a paired crease ends on it (e.g. a
     # concave crease meeting a straight convex one); the pair is split at the junction
     left = []
     for e in rest:

@@ -7,8 +7,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..errors import MeshRepairError
-from ..topology import boundary_loops, connected_components
+from meshrepair.errors import MeshRepairError
+from meshrepair.mesh.topology import boundary_loops, connected_components
 
 
 @dataclass(frozen=True)
@@ -145,10 +145,10 @@ def find_holes(V, F=None) -> list[Hole]:
     Raises
     ------
     MeshRepairError
-        For meshes :func:`meshrepair.validate.check_mesh` refuses (e.g. non-manifold edges).
+        For meshes :func:`meshrepair.mesh.validate.check_mesh` refuses (e.g. non-manifold edges).
     """
-    from ..io import as_arrays
-    from ..validate import check_mesh
+    from meshrepair.mesh.array_contract import as_arrays
+    from meshrepair.mesh.validate import check_mesh
 
     V, F = as_arrays(V, F)
     check_mesh(V, F, name="input mesh", allow_degenerate=True)

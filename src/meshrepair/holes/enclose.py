@@ -8,12 +8,12 @@ from collections.abc import Callable, Mapping, Sequence
 
 import numpy as np
 
-from ..errors import MeshRepairError
-from ._geom2d import Patch
-from .detect import Hole, HoleReport
-from .islands import pair_islands
-from .planar import ENCLOSE_METHODS, _enclose_annulus, enclose_loop
-from .refuse import _coincident_loop_vertices, _LocalFaces, _patch_problem
+from meshrepair.errors import MeshRepairError
+from meshrepair.holes._geom2d import Patch
+from meshrepair.holes.detect import Hole, HoleReport
+from meshrepair.holes.islands import pair_islands
+from meshrepair.holes.planar import ENCLOSE_METHODS, _enclose_annulus, enclose_loop
+from meshrepair.holes.refuse import _coincident_loop_vertices, _LocalFaces, _patch_problem
 
 log = logging.getLogger(__name__)
 

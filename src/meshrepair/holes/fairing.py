@@ -6,15 +6,20 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
-from ..errors import MeshRepairError
-from ._fairing_common import _barycentric_areas, _free_mask, _laplacian, _usable_rows
-from ._geom2d import _cotan_weights_2d
+from meshrepair.errors import MeshRepairError
+from meshrepair.holes._fairing_common import (
+    _barycentric_areas,
+    _free_mask,
+    _laplacian,
+    _usable_rows,
+)
+from meshrepair.holes._geom2d import _cotan_weights_2d
 
 LIEPA_COT_RANGE = (0.3, 3.0)
 """Cotangent bounds (angles 18.4°-73.3°) of the thin-plate fairing of patches enclosed by
 Liepa's triangulation (:mod:`meshrepair.fill.place`): its developed / mean-value layouts give
 anisotropic triangles, whose exact cotangents make the fairing follow the triangulation rather
-than the surround. Chosen on rocker_arm r=8 (docs/holes.md, section 3e)."""
+than the surround. Chosen on the holes benchmark (docs/holes.md, section 3e)."""
 
 
 def fair_vertices(V: np.ndarray, F: np.ndarray, free: np.ndarray, *, order: int = 2,

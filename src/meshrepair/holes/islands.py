@@ -12,8 +12,8 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from ._geom2d import _plane_frame, _polygon_is_simple, _vector_area
-from .detect import Hole
+from meshrepair.holes._geom2d import _plane_frame, _polygon_is_simple, _vector_area
+from meshrepair.holes.detect import Hole
 
 
 def _loop_side_points(V: np.ndarray, F: np.ndarray, loop: np.ndarray) -> np.ndarray:

@@ -8,12 +8,14 @@ import logging
 
 import numpy as np
 
-from .._kernels import HAVE_NUMBA
-from ..errors import MeshRepairError
-from ._geom2d import _loop_positions
+from meshrepair._kernels import HAVE_NUMBA
+from meshrepair.errors import MeshRepairError
+from meshrepair.holes._geom2d import _loop_positions
 
 if HAVE_NUMBA:
-    from .._kernels import njit  # numba.njit, without the disk cache where none is writable
+    from meshrepair._kernels import (
+        njit,  # numba.njit, without the disk cache where none is writable
+    )
 
 log = logging.getLogger(__name__)
 

@@ -9,8 +9,8 @@ import logging
 import numpy as np
 import scipy.sparse as sp
 
-from ..errors import MeshRepairError
-from ._geom2d import (
+from meshrepair.errors import MeshRepairError
+from meshrepair.holes._geom2d import (
     MIN_ANGLE,
     Patch,
     _area_switch,
@@ -18,7 +18,7 @@ from ._geom2d import (
     _orient_patch,
     _polygon_is_simple,
 )
-from .liepa import min_weight_triangulation
+from meshrepair.holes.liepa import min_weight_triangulation
 
 log = logging.getLogger(__name__)
 
@@ -129,8 +129,8 @@ def _locate(Q: np.ndarray, Tc: np.ndarray, pts: np.ndarray) -> tuple[np.ndarray,
     cell, and keeps the one where its smallest barycentric coordinate is largest. Points whose
     cell holds no containing triangle (round-off on the border) get the best of the 8 triangles
     with the nearest centroids. Time and memory O(triangles + points) for a layout of bounded
-    anisotropy; matplotlib's trapezoid-map trifinder took 100 s and 8 GB on a 2.3 M-triangle
-    mean-value layout (issue 13).
+    anisotropy; matplotlib's trapezoid-map trifinder takes 100 s and 8 GB on a 2.3 M-triangle
+    mean-value layout.
     """
     from scipy.spatial import cKDTree
 
@@ -287,7 +287,7 @@ def _mean_value_layout(S: np.ndarray, T: np.ndarray, k: int) -> np.ndarray:
     Positive weights and a convex boundary make it a valid (fold-free) layout."""
     from scipy.sparse.linalg import spsolve
 
-    from ..topology import boundary_loops
+    from meshrepair.mesh.topology import boundary_loops
 
     n = len(S)
     bl = boundary_loops(T, n)
@@ -322,7 +322,7 @@ def _mean_value_layout(S: np.ndarray, T: np.ndarray, k: int) -> np.ndarray:
 LIEPA_CREASE = 20.0
 """Chords of the minimum-weight triangulation folding by more than this (degrees) stay edges of
 the refined patch (:func:`_refine_on_triangulation`). 30° or less was needed for the unfaired
-patch of one hole of the fandisk 3-disc cut not to cut into the surface (45° was not enough);
+patch of a hole across a CAD part's creases not to cut into the surface (45° was not enough);
 the price is a few short edges (1-5 % below 0.1 of the target) where folds fan out of a loop
 vertex."""
 

@@ -12,8 +12,8 @@ import logging
 
 import numpy as np
 
-from ..errors import MeshRepairError
-from ._geom2d import (
+from meshrepair.errors import MeshRepairError
+from meshrepair.holes._geom2d import (
     Patch,
     _cotan_weights_2d,
     _harmonic,
@@ -89,7 +89,7 @@ def enclose_loop(P: np.ndarray, *, edge_length: float | None = None, method: str
         return Patch(X=P.copy(), T=np.array([[0, 2, 1]], dtype=np.int64),
                      uv=np.zeros((3, 2)), method="triangle", n_loop=3)
     if method == "liepa":
-        from .liepa_refine import _enclose_liepa
+        from meshrepair.holes.liepa_refine import _enclose_liepa
 
         return _enclose_liepa(P, h, opposite, forbidden)
     segs = np.c_[np.arange(k), (np.arange(k) + 1) % k]
@@ -194,7 +194,7 @@ def _enclose_with_creases(P, Q, segs, h2, route, c, e1, e2, method, Qc=None,
         keep = np.flatnonzero(inside)
         log.info("%d of %d crease routes leave the loop's planar view; dropped",
                  len(cs) - len(keep), len(cs))
-        from .creases import CreaseRoute
+        from meshrepair.holes.crease_ends import CreaseRoute
 
         route = CreaseRoute(points=route.points, segments=cs[keep],
                             curves=[route.curves[i] for i in keep],
@@ -219,7 +219,7 @@ def _enclose_with_creases(P, Q, segs, h2, route, c, e1, e2, method, Qc=None,
     markers = np.r_[np.ones(k, np.int32), 2 + np.arange(len(cs), dtype=np.int32)]
     data = {"vertices": Qall, "segments": np.r_[segs, cs],
             "segment_markers": markers[:, None]}
-    from ._geom2d import MIN_ANGLE, _area_switch
+    from meshrepair.holes._geom2d import MIN_ANGLE, _area_switch
 
     out = triangle.triangulate(data, f"pYQq{MIN_ANGLE:g}" + _area_switch(_max_area_for(h2)))
     X2 = np.asarray(out["vertices"], dtype=np.float64)

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .intersect import self_intersections
+from meshrepair.holes.intersect import self_intersections
 
 
 def _coincident_loop_vertices(V: np.ndarray, loop: np.ndarray) -> tuple[int, int] | None:
@@ -78,7 +78,7 @@ def _patch_problem(V: np.ndarray, F: np.ndarray, Fp: np.ndarray, interior: np.nd
     :mod:`.closure`, or the caller asked for it): a patch lying on the surface is kept, with a
     note saying so, instead of refused.
     """
-    from ..metrics import point_to_surface
+    from meshrepair.metrics import point_to_surface
 
     # a few interior vertices near the surface say nothing (a crease corner of a small hole
     # lies close to the surround): the test is for big patches doubling a sheet

@@ -29,17 +29,21 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
-from ._fairing_common import _barycentric_areas, _free_mask, _laplacian, _usable_rows
-from ._geom2d import _cotan_weights_2d
+from meshrepair.holes._fairing_common import (
+    _barycentric_areas,
+    _free_mask,
+    _laplacian,
+    _usable_rows,
+)
+from meshrepair.holes._geom2d import _cotan_weights_2d
 
 SCREEN = 0.05
 """Weight of the thin-plate term ``SCREEN Σ_i (A_i / h²) |y_i|²`` added to the energy (``h`` the
 mean edge length): the screened triharmonic ``(-Δ + 1/ℓ²) Δx = 0`` with ``ℓ = h / √SCREEN ≈
 4.5 h``. It pins the constant mode of ``y`` on a part of the patch that crease routes cut off
 from the surround, and lets the surround's curvature fade over ``ℓ`` instead of carrying it
-across a large hole. Chosen on spot (design set; 0 / 0.03 / 0.05 / 0.1 / 0.3 gave 0.313 /
-0.319 / 0.324 / 0.333 / 0.361 ×1e-3 at r=8 and 0.880 / 0.815 / 0.780 / 0.715 / 0.648 at
-r=16)."""
+across a large hole. Chosen on the holes benchmark's design set (docs/holes.md): a larger
+weight helps large holes and costs small ones, and 0.05 balances the two."""
 
 
 def _rings(F: np.ndarray, seed: np.ndarray, nV: int, k: int) -> np.ndarray:

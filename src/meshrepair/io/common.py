@@ -12,9 +12,11 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import MeshRepairError
+from meshrepair.errors import MeshRepairError
+from meshrepair.io.attributes import FileFormat
 
 logger = logging.getLogger("meshrepair.io")
+
 
 PathLike = str | os.PathLike
 
@@ -30,15 +32,42 @@ class MeshData:
     F : (nF, 3) int64
         Triangles (0-based vertex indices), in file order (polygons fan-triangulated in place).
     vertex_attributes : dict of str to (nV,) ndarray
-        Extra per-vertex scalar properties found in a PLY file (dtype as stored), e.g. a mask.
+        Per-vertex scalar properties by their PLY names, dtype as stored: colours ``red,
+        green, blue[, alpha]`` (uchar or float), normals ``nx, ny, nz``, texture coordinates
+        (``s, t`` / ``u, v`` / ``texture_u, texture_v``) and any custom property (a mask, a
+        quality). OBJ vertex colours (``v x y z r g b``) and normals (``vn``) and OFF colours
+        (``COFF``) are given under the same names.
     path : pathlib.Path or None
         The file the mesh was read from.
+    face_attributes : dict of str to (nF,) ndarray
+        Per-face scalar properties (PLY), one value per triangle (a fan-triangulated polygon
+        repeats its value).
+    texcoords : (nT, 2) float64 or None
+        Texture coordinate table (OBJ ``vt``; PLY face ``texcoord`` lists).
+    face_texcoords : (nF, 3) int64 or None
+        Per-corner index into ``texcoords``, -1 for a corner without one.
+    face_materials : (nF,) int64 or None
+        Index into ``materials`` of each face's material (OBJ ``usemtl``), -1 for none.
+    materials : list of str
+        Material names, in order of first use.
+    material_libraries : list of str
+        OBJ ``mtllib`` file names, as written in the file (the files are never touched).
+    file_format : FileFormat or None
+        How the file was stored (binary or ASCII, coordinate precision, comments); writers
+        follow it when given the mesh as ``like`` (:func:`meshrepair.io.write_mesh`).
     """
 
     V: np.ndarray
     F: np.ndarray
     vertex_attributes: dict[str, np.ndarray] = field(default_factory=dict)
     path: Path | None = None
+    face_attributes: dict[str, np.ndarray] = field(default_factory=dict)
+    texcoords: np.ndarray | None = None
+    face_texcoords: np.ndarray | None = None
+    face_materials: np.ndarray | None = None
+    materials: list[str] = field(default_factory=list)
+    material_libraries: list[str] = field(default_factory=list)
+    file_format: FileFormat | None = None
 
     @property
     def n_vertices(self) -> int:

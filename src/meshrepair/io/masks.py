@@ -8,9 +8,9 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import MeshRepairError
-from .common import PathLike, _Bad, _fail_read, _read_text, _suffix, check_input_file
-from .ply import _load_ply, _ply_scalar_props
+from meshrepair.errors import MeshRepairError
+from meshrepair.io.common import PathLike, _Bad, _fail_read, _read_text, _suffix, check_input_file
+from meshrepair.io.ply import _load_ply, _ply_scalar_props
 
 # vertex properties that are never taken as a mask when no name is given
 _NOT_A_MASK = {"nx", "ny", "nz", "red", "green", "blue", "alpha", "r", "g", "b", "a",
@@ -157,3 +157,31 @@ def read_vertex_mask(
         bad = next(t for t in tokens if not t.lstrip("+-").isdigit())
         raise _fail_read(p, f"expected integer vertex indices, found {bad!r}") from None
     return _mask_from_values(vals, n_vertices, src)
+
+
+def read_face_selection(path: str | Path, n_faces: int) -> np.ndarray:
+    """Face indices from a text file (whitespace/comma separated integers, ``#`` comments).
+
+    Returns
+    -------
+    (k,) int64, sorted unique face indices in ``[0, n_faces)``
+    """
+    p = check_input_file(path, "region ")
+    try:
+        text = p.read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError) as exc:
+        raise MeshRepairError(f"cannot read region file {str(p)!r} as text: {exc}") from None
+    toks = [t for line in text.splitlines()
+            for t in line.split("#", 1)[0].replace(",", " ").split()]
+    try:
+        idx = np.array([int(t) for t in toks], dtype=np.int64)
+    except ValueError:
+        raise MeshRepairError(f"region file {str(p)!r} must hold integer face indices (or give a "
+                              ".ply/.npy per-vertex mask instead)") from None
+    if idx.size == 0:
+        raise MeshRepairError(f"region file {str(p)!r} lists no face")
+    bad = (idx < 0) | (idx >= n_faces)
+    if bad.any():
+        raise MeshRepairError(f"region file {str(p)!r}: {int(bad.sum())} face indices out of range "
+                              f"[0, {n_faces - 1}] (e.g. {idx[bad][:5].tolist()})")
+    return np.unique(idx)

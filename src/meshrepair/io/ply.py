@@ -20,8 +20,9 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import MeshRepairError
-from .common import MeshData, _Bad, _check_indices, _fan_triangulate, _undercount
+from meshrepair.errors import MeshRepairError
+from meshrepair.io.attributes import FileFormat
+from meshrepair.io.common import MeshData, _Bad, _check_indices, _fan_triangulate, _undercount
 
 logger = logging.getLogger("meshrepair.io")
 
@@ -154,8 +155,21 @@ def _read_ply(path: Path) -> MeshData:
     skipped = [p.name for p in vert.properties
                if isinstance(p, plyfile.PlyListProperty)]
     if skipped:
-        logger.info("%s: ignoring per-vertex list properties %s", path, skipped)
+        logger.warning("%s: per-vertex list properties %s are not kept (only scalar vertex "
+                       "properties are)", path, skipped)
+    others = [n for n in names if n not in ("vertex", "face")]
+    if others:
+        logger.warning("%s: PLY elements %s are not kept (only 'vertex' and 'face' are)", path,
+                       others)
+    xdt = np.dtype(data["x"].dtype)
+    fmt = FileFormat(binary=not ply.text,
+                     precision="float32" if xdt.kind == "f" and xdt.itemsize == 4
+                     else "float64",
+                     comments=[str(c) for c in ply.comments]
+                     + [f"obj_info {c}" for c in getattr(ply, "obj_info", [])])
 
+    face_attrs: dict[str, np.ndarray] = {}
+    texcoords = face_tc = None
     if "face" not in names:
         if "tristrips" in names:
             raise _Bad("faces stored as 'tristrips' are not supported; convert to triangles")
@@ -176,30 +190,61 @@ def _read_ply(path: Path) -> MeshData:
             flat = (np.concatenate([np.asarray(a, dtype=np.int64) for a in col])
                     if len(col) else np.empty(0, dtype=np.int64))
         F = _fan_triangulate(flat, counts, str(path))
+        per_tri = np.repeat(np.arange(len(counts)), np.maximum(counts - 2, 0))
+        for p in _ply_scalar_props(face):
+            c = face.data[p.name]
+            face_attrs[p.name] = np.array(c, dtype=c.dtype.newbyteorder("="))[per_tri]
+        if "texcoord" in lists and key != "texcoord":
+            texcoords, face_tc = _corner_texcoords(face.data["texcoord"], counts, path)
+        dropped = [n for n in lists if n not in (key, "texcoord")]
+        if dropped:
+            logger.warning("%s: per-face list properties %s are not kept", path, dropped)
     del ply, data
     _check_indices(F, len(V))
-    return MeshData(V=V, F=F, vertex_attributes=attrs, path=path)
+    return MeshData(V=V, F=F, vertex_attributes=attrs, path=path, face_attributes=face_attrs,
+                    texcoords=texcoords, face_texcoords=face_tc, file_format=fmt)
+
+
+def _corner_texcoords(col: Any, counts: np.ndarray, path: Path
+                      ) -> tuple[np.ndarray | None, np.ndarray | None]:
+    """Per-corner texture coordinates from a face ``texcoord`` list (``u0 v0 u1 v1 ...``, the
+    layout MeshLab writes), fan-triangulated like the faces: a (nT, 2) table, one row per
+    polygon corner, and (nF, 3) indices into it."""
+    lens = np.fromiter((len(a) for a in col), dtype=np.int64, count=len(col))
+    if not np.array_equal(lens, 2 * counts):
+        logger.warning("%s: the face 'texcoord' lists do not hold 2 values per corner; texture "
+                       "coordinates are not kept", path)
+        return None, None
+    table = (np.concatenate([np.asarray(a, np.float64) for a in col]).reshape(-1, 2)
+             if len(col) else np.empty((0, 2)))
+    starts = np.concatenate([[0], np.cumsum(counts)[:-1]]).astype(np.int64)
+    ntri = np.maximum(counts - 2, 0)
+    first = np.repeat(starts, ntri)
+    j = np.arange(int(ntri.sum())) - np.repeat(np.cumsum(ntri) - ntri, ntri) + 1
+    return table, np.stack([first, first + j, first + j + 1], axis=1).astype(np.int64)
 
 
 def _ply_attr_columns(
-    vertex_attributes: Mapping[str, Any] | None, nV: int
+    vertex_attributes: Mapping[str, Any] | None, nV: int, what: str = "vertex"
 ) -> list[tuple[str, np.ndarray, str]]:
-    """Validate attributes for PLY output: (name, array, ply type) triples."""
+    """Validate attributes for PLY output: (name, array, ply type) triples; ``what`` is
+    ``"vertex"`` (nV = number of vertices) or ``"face"`` (nV = number of faces)."""
+    reserved = ("x", "y", "z") if what == "vertex" else ("vertex_indices", "texcoord")
     out: list[tuple[str, np.ndarray, str]] = []
     for name, values in (vertex_attributes or {}).items():
         if not isinstance(name, str) or not name or any(ch.isspace() for ch in name) \
-                or name in ("x", "y", "z"):
+                or name in reserved:
             raise MeshRepairError(
-                f"invalid vertex attribute name {name!r}: use a non-empty name without spaces, "
-                "other than x, y, z"
+                f"invalid {what} attribute name {name!r}: use a non-empty name without spaces, "
+                f"other than {', '.join(reserved)}"
             )
         a = np.asarray(values)
         if a.ndim == 2 and a.shape[1] == 1:
             a = a[:, 0]
         if a.shape != (nV,):
             raise MeshRepairError(
-                f"vertex attribute {name!r} has shape {a.shape}, expected ({nV},) "
-                "(one scalar per vertex)"
+                f"{what} attribute {name!r} has shape {a.shape}, expected ({nV},) "
+                f"(one scalar per {what})"
             )
         if a.dtype == bool:
             a = a.astype(np.uint8)
@@ -210,14 +255,14 @@ def _ply_attr_columns(
             info = np.iinfo(target)
             if a.size and (a.min() < info.min or a.max() > info.max):
                 raise MeshRepairError(
-                    f"vertex attribute {name!r} has values outside the 32-bit range of PLY "
+                    f"{what} attribute {name!r} has values outside the 32-bit range of PLY "
                     "integers; convert it to float64"
                 )
             a = a.astype(target)
         a = a.astype(a.dtype.newbyteorder("="), copy=False)
         if a.dtype not in _PLY_TYPES:
             raise MeshRepairError(
-                f"vertex attribute {name!r} has dtype {a.dtype}, which PLY cannot store "
+                f"{what} attribute {name!r} has dtype {a.dtype}, which PLY cannot store "
                 "(use a float or integer array)"
             )
         out.append((name, a, _PLY_TYPES[a.dtype]))
@@ -225,32 +270,64 @@ def _ply_attr_columns(
 
 
 def _write_ply(fh: Any, V: np.ndarray, F: np.ndarray, attrs: list[tuple[str, np.ndarray, str]],
-               binary: bool) -> None:
+               binary: bool, *, coord: Any = "f8",
+               face_attrs: list[tuple[str, np.ndarray, str]] = (),
+               corner_uv: np.ndarray | None = None, comments: list[str] = ()) -> None:
+    """Write PLY: ``x, y, z`` in ``coord`` (float or double), then ``attrs``; faces as ``uchar``
+    count + ``int`` indices, then ``face_attrs``, then (if given) a ``texcoord`` list of the
+    (nF, 6) per-corner texture coordinates ``corner_uv``."""
     # Written directly (not via plyfile, which serialises list elements record by record);
     # the layout is the standard one and is read back by plyfile.
     fmt = "binary_little_endian" if binary else "ascii"
-    header = ["ply", f"format {fmt} 1.0", f"element vertex {len(V)}",
-              "property double x", "property double y", "property double z"]
+    ct = _PLY_TYPES[np.dtype(coord)]
+    header = ["ply", f"format {fmt} 1.0"]
+    header += [("obj_info " + c[9:]) if c.startswith("obj_info ") else f"comment {c}"
+               for c in comments]
+    header += [f"element vertex {len(V)}", f"property {ct} x", f"property {ct} y",
+               f"property {ct} z"]
     header += [f"property {t} {n}" for n, _, t in attrs]
-    header += [f"element face {len(F)}", "property list uchar int vertex_indices", "end_header"]
+    header += [f"element face {len(F)}", "property list uchar int vertex_indices"]
+    header += [f"property {t} {n}" for n, _, t in face_attrs]
+    if corner_uv is not None:
+        header.append("property list uchar float texcoord")
+    header.append("end_header")
     fh.write(("\n".join(header) + "\n").encode("ascii"))
-    vdtype = [("x", "<f8"), ("y", "<f8"), ("z", "<f8")]
+    cs = np.dtype(coord).newbyteorder("<").str
+    vdtype = [("x", cs), ("y", cs), ("z", cs)]
     vdtype += [(n, a.dtype.newbyteorder("<").str) for n, a, _ in attrs]
     vrec = np.empty(len(V), dtype=vdtype)
     vrec["x"], vrec["y"], vrec["z"] = V[:, 0], V[:, 1], V[:, 2]
     for n, a, _ in attrs:
         vrec[n] = a
-    frec = np.empty(len(F), dtype=[("n", "u1"), ("i", "<i4", (3,))])
+    fdtype = [("n", "u1"), ("i", "<i4", (3,))]
+    fdtype += [(n, a.dtype.newbyteorder("<").str) for n, a, _ in face_attrs]
+    if corner_uv is not None:
+        fdtype += [("m", "u1"), ("uv", "<f4", (6,))]
+    frec = np.empty(len(F), dtype=fdtype)
     frec["n"] = 3
     frec["i"] = F
+    for n, a, _ in face_attrs:
+        frec[n] = a
+    if corner_uv is not None:
+        frec["m"] = 6
+        frec["uv"] = corner_uv
     if binary:
         fh.write(vrec.tobytes())
         fh.write(frec.tobytes())
         return
-    fmts = ["%.17g"] * 3 + ["%.9g" if a.dtype == np.float32 else "%.17g"
-                            if a.dtype.kind == "f" else "%d" for _, a, _ in attrs]
+    cf = "%.9g" if np.dtype(coord) == np.float32 else "%.17g"
+    fmts = [cf] * 3 + [_ascii_fmt(a) for _, a, _ in attrs]
     if len(V):
         np.savetxt(fh, vrec, fmt=fmts, delimiter=" ")
     if len(F):
-        np.savetxt(fh, np.c_[np.full(len(F), 3), F], fmt="%d", delimiter=" ")
+        cols = [np.full((len(F), 1), 3), F] + [a.reshape(-1, 1) for _, a, _ in face_attrs]
+        ffmts = ["%d"] * 4 + [_ascii_fmt(a) for _, a, _ in face_attrs]
+        if corner_uv is not None:
+            cols += [np.full((len(F), 1), 6), corner_uv.astype(np.float32)]
+            ffmts += ["%d"] + ["%.9g"] * 6
+        table = np.concatenate([np.asarray(c, dtype=np.float64) for c in cols], axis=1)
+        np.savetxt(fh, table, fmt=ffmts, delimiter=" ")
 
+
+def _ascii_fmt(a: np.ndarray) -> str:
+    return "%.9g" if a.dtype == np.float32 else "%.17g" if a.dtype.kind == "f" else "%d"

@@ -18,8 +18,9 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import MeshRepairError
-from .common import MeshData, _Bad, _undercount
+from meshrepair.errors import MeshRepairError
+from meshrepair.io.attributes import FileFormat
+from meshrepair.io.common import MeshData, _Bad, _undercount
 
 logger = logging.getLogger("meshrepair.io")
 
@@ -94,9 +95,13 @@ def _read_stl(path: Path) -> MeshData:
                 logger.warning("%s: %d trailing bytes after the binary STL data ignored", path,
                                size - expected)
             rec = np.frombuffer(data, dtype=_STL_DTYPE, count=n, offset=84)
+            if n and rec["attr"].any():
+                logger.warning("%s: the per-facet attribute bytes of the binary STL (facet "
+                               "colours in some exporters) are not kept", path)
             corners = rec["v"].reshape(-1, 3).astype(np.float64)
             V, F = _merge_soup(corners, path)
-            return MeshData(V=V, F=F, path=path)
+            return MeshData(V=V, F=F, path=path, file_format=FileFormat(binary=True,
+                                                                       precision="float32"))
         if not is_solid or b"\x00" in data[84:]:  # binary (text STL has no NUL bytes)
             what = "truncated" if size < expected else "inconsistent"
             raise _Bad(f"{what} binary STL: header declares {n} triangles ({expected} bytes) "
@@ -112,7 +117,7 @@ def _read_stl(path: Path) -> MeshData:
     except ValueError:
         raise _Bad("malformed ASCII STL vertex coordinates") from None
     V, F = _merge_soup(corners, path)
-    return MeshData(V=V, F=F, path=path)
+    return MeshData(V=V, F=F, path=path, file_format=FileFormat(binary=False))
 
 
 def _write_stl(fh: Any, V: np.ndarray, F: np.ndarray, binary: bool, path: Path) -> None:

@@ -6,7 +6,7 @@ Meshes are drawn by a small **vectorised numpy z-buffer rasteriser** (orthograph
 per-pixel occlusion), and matplotlib (Agg backend, no display) is used only to lay out the
 finished raster with a title, a colour bar and, for :func:`compare_figure`, several panels.
 
-Measured on ``igea.ply`` (134,345 vertices, 268,686 faces) at 800 x 800 on the 2-core dev
+Measured on a 134,345-vertex mesh (268,686 faces) at 800 x 800 on the 2-core dev
 machine: the rasteriser itself takes 0.2-0.4 s, a full :func:`render_mesh` call with curvature
 colouring and colour bar 0.4-0.7 s (mean curvature 0.13 s, matplotlib layout ~0.15 s), with
 ``supersample=2`` 0.9-1.2 s.
@@ -35,15 +35,15 @@ Modules
 
 from __future__ import annotations
 
-from .camera import _camera_axes as _camera_axes
-from .colour import _MASK_COLOURS as _MASK_COLOURS
-from .colour import _categories as _categories
-from .colour import _lut as _lut
-from .colour import _robust_range as _robust_range
-from .compare import compare_figure
-from .mesh import MAX_RASTER_PIXELS as MAX_RASTER_PIXELS
-from .mesh import render_mesh
-from .png import render_to_file, save_png
+from meshrepair.render.camera import _camera_axes as _camera_axes
+from meshrepair.render.colour import _MASK_COLOURS as _MASK_COLOURS
+from meshrepair.render.colour import _categories as _categories
+from meshrepair.render.colour import _lut as _lut
+from meshrepair.render.colour import _robust_range as _robust_range
+from meshrepair.render.compare import compare_figure
+from meshrepair.render.mesh import MAX_RASTER_PIXELS as MAX_RASTER_PIXELS
+from meshrepair.render.mesh import render_mesh
+from meshrepair.render.png import render_to_file, save_png
 
 __all__ = [
     "compare_figure",

@@ -7,7 +7,7 @@ The view is fitted so that the projected mesh (or the ``fit_bounds`` box, or in
 A camera can instead be *aimed*: ``view_dir`` (the direction it looks in) replaces the angles,
 and ``look_at`` with ``radius`` fits the sphere around that point into the picture (4 % margin)
 and, by default, clips away what lies between the camera and the sphere (depth test against the
-near plane ``depth(look_at) - radius``). :mod:`meshrepair.framing` computes such spheres and
+near plane ``depth(look_at) - radius``). :mod:`meshrepair.render.framing` computes such spheres and
 normals for a hole or a region.
 """
 
@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..errors import MeshRepairError
+from meshrepair.errors import MeshRepairError
 
 _MARGIN = 0.04  # fraction of the viewport left empty on each side
 
@@ -69,7 +69,7 @@ def _project(
 
 def _aim(azimuth, elevation, view_dir, look_at, radius, clip):
     """Camera axes, the fitted window (None: fit the mesh) and the near clipping depth."""
-    from ..framing import view_axes
+    from meshrepair.render.framing import view_axes
 
     if view_dir is not None:
         if azimuth is not None or elevation is not None:

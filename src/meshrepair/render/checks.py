@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..errors import MeshRepairError
-from ..topology import edge_topology
+from meshrepair.errors import MeshRepairError
+from meshrepair.mesh.topology import edge_topology
 
 _SHADINGS = ("flat", "smooth")
 
@@ -70,7 +70,7 @@ def _selected_edges(F: np.ndarray, nV: int, edge_mask: np.ndarray | None) -> np.
     if m.shape[0] != len(edges):
         raise MeshRepairError(
             f"edge_mask has {m.shape[0]} entries but the mesh has {len(edges)} edges; build it "
-            "aligned with meshrepair.topology.edge_topology(F).edges"
+            "aligned with meshrepair.mesh.topology.edge_topology(F).edges"
         )
     return edges[m]
 

@@ -10,8 +10,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..errors import MeshRepairError
-from ..geometry import mean_curvature
+from meshrepair.errors import MeshRepairError
+from meshrepair.mesh.operators import mean_curvature
 
 _BASE_GREY = np.array([0.80, 0.80, 0.82])
 _NAN_GREY = np.array([0.55, 0.55, 0.55])

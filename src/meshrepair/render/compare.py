@@ -7,13 +7,31 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from ..errors import MeshRepairError
-from .camera import _aim, _view_window
-from .checks import _check_mesh, _check_shading, _face_highlight, _per_mesh, _selected_edges
-from .colour import _categories, _lut, _resolve_color_mode, _scalar_field, _value_range
-from .figure import _colorbar_width, _figure_to_array, _font_pt, _new_figure, _panel_colorbar
-from .png import save_png
-from .raster import _raster, _to_uint8
+from meshrepair.errors import MeshRepairError
+from meshrepair.render.camera import _aim, _view_window
+from meshrepair.render.checks import (
+    _check_mesh,
+    _check_shading,
+    _face_highlight,
+    _per_mesh,
+    _selected_edges,
+)
+from meshrepair.render.colour import (
+    _categories,
+    _lut,
+    _resolve_color_mode,
+    _scalar_field,
+    _value_range,
+)
+from meshrepair.render.figure import (
+    _colorbar_width,
+    _figure_to_array,
+    _font_pt,
+    _new_figure,
+    _panel_colorbar,
+)
+from meshrepair.render.png import save_png
+from meshrepair.render.raster import _raster, _to_uint8
 
 
 def compare_figure(

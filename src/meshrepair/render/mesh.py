@@ -4,12 +4,30 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..errors import MeshRepairError
-from .camera import _aim, _box_corners, _view_window
-from .checks import _check_bounds, _check_mesh, _check_shading, _face_highlight, _selected_edges
-from .colour import _categories, _lut, _resolve_color_mode, _scalar_field, _value_range
-from .figure import _colorbar_width, _figure_to_array, _font_pt, _new_figure, _panel_colorbar
-from .raster import _raster, _to_uint8
+from meshrepair.errors import MeshRepairError
+from meshrepair.render.camera import _aim, _box_corners, _view_window
+from meshrepair.render.checks import (
+    _check_bounds,
+    _check_mesh,
+    _check_shading,
+    _face_highlight,
+    _selected_edges,
+)
+from meshrepair.render.colour import (
+    _categories,
+    _lut,
+    _resolve_color_mode,
+    _scalar_field,
+    _value_range,
+)
+from meshrepair.render.figure import (
+    _colorbar_width,
+    _figure_to_array,
+    _font_pt,
+    _new_figure,
+    _panel_colorbar,
+)
+from meshrepair.render.raster import _raster, _to_uint8
 
 MAX_RASTER_PIXELS = 4096 * 4096
 """Largest ``width * height * supersample**2`` :func:`render_mesh` accepts. Measured peak memory
@@ -59,7 +77,7 @@ def render_mesh(
         has both lengths is taken per vertex. NaN values are drawn grey.
     color_by : {"curvature", "none", "scalars"}, optional
         ``"curvature"``: signed discrete mean curvature
-        (:func:`meshrepair.geometry.mean_curvature`) on a diverging colour map with a range
+        (:func:`meshrepair.mesh.operators.mean_curvature`) on a diverging colour map with a range
         symmetric about 0; ``"none"``: uniform light grey; ``"scalars"``: ``scalars``.
         Default: ``"scalars"`` if ``scalars`` is given, else ``"curvature"``.
     shading : {"flat", "smooth"}
@@ -67,7 +85,7 @@ def render_mesh(
         normals.
     edge_mask : (nE,) bool, optional
         Edges to draw as dark lines, aligned with
-        ``meshrepair.topology.edge_topology(F).edges`` (numeric 0/1 masks are accepted).
+        ``meshrepair.mesh.topology.edge_topology(F).edges`` (numeric 0/1 masks are accepted).
         Hidden edges are not drawn.
     region_mask : (nV,) or (nF,) bool, optional
         Per-vertex mask (faces whose three vertices are inside are tinted blue) or per-face mask
@@ -99,11 +117,12 @@ def render_mesh(
     view_dir : (3,) float, optional
         Direction the camera looks in (instead of ``azimuth``/``elevation``); ``(0, 0, -1)``
         is the default view. Up on the picture is ``+y`` (``-z`` or ``+z`` when looking
-        vertically), see :func:`meshrepair.framing.view_axes`.
+        vertically), see :func:`meshrepair.render.framing.view_axes`.
     look_at : (3,) float, optional
         Point at the centre of the picture; the view is fitted to the sphere of ``radius``
         around it instead of the whole mesh (aim at a region with
-        :func:`meshrepair.framing.frame_faces` / :func:`~meshrepair.framing.frame_hole`).
+        :func:`meshrepair.render.framing.frame_faces` /
+        :func:`~meshrepair.render.framing.frame_hole`).
     radius : float, optional
         Radius of that sphere (required with ``look_at``, > 0).
     clip : bool
@@ -126,7 +145,7 @@ def render_mesh(
         For malformed meshes, masks or options.
     """
     V, F = _check_mesh(V, F)
-    from ..options import check_int, check_number
+    from meshrepair.options import check_int, check_number
 
     width, height = check_int("width", width), check_int("height", height)
     supersample = check_int("supersample", supersample)

@@ -8,9 +8,9 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import MeshRepairError
-from .mesh import render_mesh
-from .raster import _to_uint8
+from meshrepair.errors import MeshRepairError
+from meshrepair.render.mesh import render_mesh
+from meshrepair.render.raster import _to_uint8
 
 log = logging.getLogger("meshrepair.render")
 
@@ -39,7 +39,7 @@ def save_png(path: str | os.PathLike, image: np.ndarray, *, overwrite: bool = Tr
         if not np.issubdtype(img.dtype, np.floating):
             raise MeshRepairError(f"image must be uint8 or float in [0, 1], got {img.dtype}")
         img = _to_uint8(img)
-    from ..atomic import atomic_write
+    from meshrepair.atomic import atomic_write
 
     p = Path(path)
     with atomic_write(p, "wb", overwrite=overwrite, make_parents=True) as fh:

@@ -16,9 +16,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..geometry import face_normals_areas, vertex_normals
-from .camera import _project
-from .colour import _BASE_GREY, _NAN_GREY, _lut
+from meshrepair.mesh.geometry import face_normals_areas, vertex_normals
+from meshrepair.render.camera import _project
+from meshrepair.render.colour import _BASE_GREY, _NAN_GREY, _lut
 
 _CHUNK = 1 << 20  # candidate (triangle, pixel) pairs processed at once
 _REGION_BLUE = np.array([0.20, 0.42, 0.95])

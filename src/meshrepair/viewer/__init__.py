@@ -5,8 +5,8 @@
 display copies of big meshes and ``vendor/README.md`` for how three.js is vendored.
 """
 
-from .decimate import Decimation, cluster_decimate
-from .page import (
+from meshrepair.viewer.decimate import Decimation, cluster_decimate
+from meshrepair.viewer.page import (
     DEFAULT_FACE_BUDGET,
     ViewerMesh,
     viewer_page,

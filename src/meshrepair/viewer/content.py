@@ -7,9 +7,9 @@ from collections.abc import Mapping, Sequence
 
 import numpy as np
 
-from ..errors import MeshRepairError
-from ..framing import Frame, frame_faces, frame_loop
-from .page import ViewerMesh
+from meshrepair.errors import MeshRepairError
+from meshrepair.render.framing import Frame, frame_faces, frame_loop
+from meshrepair.viewer.page import ViewerMesh
 
 __all__ = ["HIGHLIGHT_ATTRIBUTES", "hole_regions", "mesh_pane", "mesh_regions"]
 
@@ -58,8 +58,9 @@ def mesh_pane(
     sharp_mask : (nE,) bool, optional
         ``M_E`` aligned with ``edge_topology(F).edges`` (e.g. the solver's).
     """
-    from ..geometry import face_normals, mean_curvature, sharp_edge_mask
-    from ..topology import edge_topology
+    from meshrepair.mesh.geometry import face_normals, sharp_edge_mask
+    from meshrepair.mesh.operators import mean_curvature
+    from meshrepair.mesh.topology import edge_topology
 
     V = np.asarray(V, dtype=np.float64)
     F = np.asarray(F, dtype=np.int64)
@@ -95,7 +96,7 @@ def mesh_pane(
 
 def _face_components(F: np.ndarray, faces: np.ndarray, nV: int) -> list[np.ndarray]:
     """Face index arrays of the vertex-connected components of ``F[faces]``, largest first."""
-    from ..topology import connected_components
+    from meshrepair.mesh.topology import connected_components
 
     if len(faces) == 0:
         return []
@@ -114,13 +115,13 @@ def mesh_regions(V: np.ndarray, F: np.ndarray, *, highlight: np.ndarray | None =
     frames: list[Frame] = []
     details: list[str] = []
     try:
-        from ..holes import find_holes
+        from meshrepair.holes import find_holes
 
         holes = find_holes(V, F)
         loops = [(h.index, h.vertices, f"open: {len(h.vertices)} boundary edges, length "
                   f"{h.length:.4g}") for h in holes]
     except MeshRepairError as exc:  # e.g. non-manifold: fall back to the raw boundary loops
-        from ..topology import boundary_loops
+        from meshrepair.mesh.topology import boundary_loops
 
         log.info("hole list of the viewer from raw boundary loops (%s)", exc)
         loops = [(k, lp, f"open: {len(lp)} boundary edges")

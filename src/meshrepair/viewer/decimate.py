@@ -17,7 +17,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import MeshRepairError
+from meshrepair.errors import MeshRepairError
 
 __all__ = ["Decimation", "cluster_decimate"]
 

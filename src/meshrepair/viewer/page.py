@@ -33,9 +33,9 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import MeshRepairError
-from ..framing import Frame
-from .decimate import cluster_decimate
+from meshrepair.errors import MeshRepairError
+from meshrepair.render.framing import Frame
+from meshrepair.viewer.decimate import cluster_decimate
 
 __all__ = ["DEFAULT_FACE_BUDGET", "ViewerMesh", "viewer_page", "viewer_section", "write_viewer"]
 
@@ -78,6 +78,28 @@ class ViewerMesh:
     sharp_edges: np.ndarray | None = None
 
 
+def _fmt(v: object) -> str:
+    """Readable text for a table cell (numbers with 6 significant digits)."""
+    if isinstance(v, np.generic):
+        v = v.item()
+    if isinstance(v, bool) or v is None:
+        return str(v)
+    if isinstance(v, int):
+        return str(v)
+    if isinstance(v, float):
+        return f"{v:.6g}"
+    if isinstance(v, np.ndarray):
+        if v.size <= 8:
+            return np.array2string(v, precision=6, separator=", ")
+        return f"array of shape {v.shape}, dtype {v.dtype}"
+    if isinstance(v, Mapping):
+        return ", ".join(f"{k}={_fmt(x)}" for k, x in v.items())
+    if isinstance(v, (list, tuple)):
+        inner = ", ".join(_fmt(x) for x in v)
+        return f"[{inner}]" if isinstance(v, list) else f"({inner})"
+    return str(v)
+
+
 def _b64(a: np.ndarray, dtype: str) -> str:
     return base64.b64encode(np.ascontiguousarray(a, dtype=dtype).tobytes()).decode("ascii")
 
@@ -106,7 +128,7 @@ def _check(m: ViewerMesh, i: int) -> tuple[np.ndarray, np.ndarray]:
 
 def _scalar_specs(meshes: Sequence[ViewerMesh]) -> dict:
     """Colour range and look-up table of each scalar name (one range over all panes)."""
-    from ..render import _lut, _robust_range
+    from meshrepair.render import _lut, _robust_range
 
     names: list[str] = []
     for m in meshes:
@@ -257,8 +279,6 @@ def viewer_page(
     ``metrics`` maps a metric name to one value per mesh (shown as a table, one column per
     mesh). Other parameters as :func:`viewer_section`.
     """
-    from ..report_html import _fmt
-
     parts = [viewer_section(meshes, regions, face_budget=face_budget, height=height,
                             region_details=region_details)]
     if metrics:
@@ -283,7 +303,7 @@ def write_viewer(path: str | os.PathLike, meshes: Sequence[ViewerMesh],
                  regions: Sequence[Frame] | None = None, **kw) -> Path:
     """Write :func:`viewer_page` to ``path`` (atomically); keywords as :func:`viewer_page`."""
     page = viewer_page(meshes, regions, **kw)
-    from ..atomic import atomic_write
+    from meshrepair.atomic import atomic_write
 
     p = Path(path)
     with atomic_write(p, "w") as fh:

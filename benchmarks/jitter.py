@@ -1,0 +1,143 @@
+"""Stability of the denoising decisions under a rounding-level jitter of the input (issue 26).
+
+For every shared noisy case (``noisy/<stem>__<noise>.ply`` against its truth ``<stem>.ply``) and
+every published triple (``published/<case>__noisy.ply`` against ``__truth.ply``), ``denoise(V, F)``
+runs at its defaults on the input and on the input with every vertex moved by
+``eps · diag`` (``diag`` = bounding-box diagonal, default ``eps = 1e-10``) in a random direction
+(seeded). A denoiser whose decisions are not on knife edges gives the same MSAE (33) to about
+``eps``; the table prints both MSAEs and the relative change ``MSAE_jitter / MSAE - 1`` per case,
+then the largest and the median of ``|change|``.
+
+    python benchmarks/jitter.py --quick            # three cases (CAD, organic, real Kinect)
+    python benchmarks/jitter.py                    # every noisy and published case
+    python benchmarks/jitter.py --only fandisk --eps 1e-8 --seed 3 --out table.md
+    python benchmarks/jitter.py --decisions 0.5    # + the params that moved where |change| > 0.5 %
+
+The machine's memory probe is printed with the table (benchmarks/_common.py).
+"""
+
+from __future__ import annotations
+
+import argparse
+import re
+import sys
+import time
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+import _common as C  # noqa: E402, I001  (sets the thread env vars before numpy is imported)
+import numpy as np  # noqa: E402
+
+QUICK = ("noisy/fandisk__gauss0.3", "noisy/trim_star__gauss_n3", "published/tgv_kinect_pyramid")
+
+
+def cases() -> list[tuple[str, str, str]]:
+    """``(case, noisy path name, truth path name)`` for every shared noisy and published case."""
+    out = []
+    for p in sorted((C.MESHES / "noisy").glob("*__*.ply")):
+        stem = p.name.split("__")[0]
+        if (C.MESHES / f"{stem}.ply").exists():
+            out.append((f"noisy/{p.stem}", f"noisy/{p.stem}", stem))
+    for p in sorted((C.MESHES / "published").glob("*__noisy.ply")):
+        case = p.name[: -len("__noisy.ply")]
+        if (C.MESHES / "published" / f"{case}__truth.ply").exists():
+            out.append((f"published/{case}", f"published/{case}__noisy",
+                        f"published/{case}__truth"))
+    if not out:
+        raise SystemExit(f"no noisy or published cases under {C.MESHES}")
+    return out
+
+
+def jitter(V: np.ndarray, eps: float, seed: int) -> np.ndarray:
+    """``V`` with every vertex moved by exactly ``eps · diag`` along a random unit direction."""
+    rng = np.random.default_rng(seed)
+    d = rng.standard_normal(V.shape)
+    d /= np.linalg.norm(d, axis=1, keepdims=True)
+    diag = float(np.linalg.norm(V.max(axis=0) - V.min(axis=0)))
+    return V + (eps * diag) * d
+
+
+def run(case, noisy, truth, eps: float, seed: int) -> dict:
+    from meshrepair import denoise, msae
+
+    Vn, F, _ = C.read(noisy)
+    Vt, Ft, _ = C.read(truth)
+    if not np.array_equal(F, Ft):
+        raise SystemExit(f"{noisy} and {truth} do not share faces")
+    t = time.perf_counter()
+    r0 = denoise(Vn, F)
+    r1 = denoise(jitter(Vn, eps, seed), F)
+    m0, m1 = msae(r0.V, Vt, F), msae(r1.V, Vt, F)
+    return {"case": case, "nV": len(Vn), "msae": m0, "msae_jitter": m1,
+            "change": m1 / m0 - 1.0, "time_s": time.perf_counter() - t,
+            "moved": moved_params(r0.params, r1.params)}
+
+
+def moved_params(p0: dict, p1: dict, rel: float = 1e-3) -> dict:
+    """The scalar entries of ``params`` that differ by more than ``rel`` (relative) between the
+    two runs, ``{name: (value, jittered value)}``: the decisions that sit on a knife edge."""
+    out = {}
+    for k in sorted(set(p0) & set(p1)):
+        a, b = p0[k], p1[k]
+        if isinstance(a, bool) or isinstance(b, bool) or isinstance(a, str):
+            if a != b:
+                out[k] = (a, b)
+        elif isinstance(a, (int, float)) and isinstance(b, (int, float)):
+            if abs(a - b) > rel * max(abs(a), abs(b), 1e-12):
+                out[k] = (a, b)
+    return out
+
+
+def _fmt(x) -> str:
+    return f"{x:.4g}" if isinstance(x, float) else str(x)
+
+
+def main(argv=None) -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--quick", action="store_true", help=f"only {', '.join(QUICK)}")
+    ap.add_argument("--only", help="regex on the case name")
+    ap.add_argument("--eps", type=float, default=1e-10, help="jitter / bounding-box diagonal")
+    ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--out", help="also write the markdown table to this file")
+    ap.add_argument("--decisions", type=float, default=None, metavar="PCT",
+                    help="list the params that moved (> 0.1 %%) for cases whose |change| > PCT %%")
+    args = ap.parse_args(argv)
+    if not (np.isfinite(args.eps) and args.eps > 0):
+        raise SystemExit("--eps must be a positive finite number")
+    todo = cases()
+    if args.quick:
+        todo = [c for c in todo if c[0] in QUICK]
+    if args.only:
+        todo = [c for c in todo if re.search(args.only, c[0])]
+    C.limit_threads(1)
+    print(f"machine: {C.machine_info()}\n", flush=True)
+    lines = [f"jitter {args.eps:g} · bounding-box diagonal per vertex, seed {args.seed}", "",
+             "| case | #V | MSAE | MSAE jittered | change | time (2 runs) |",
+             "|---|---:|---:|---:|---:|---:|"]
+    for line in lines:
+        print(line, flush=True)
+    rows = []
+    for case, noisy, truth in todo:
+        r = run(case, noisy, truth, args.eps, args.seed)
+        rows.append(r)
+        line = (f"| {case} | {r['nV']} | {r['msae']:.3f} | {r['msae_jitter']:.3f} "
+                f"| {100 * r['change']:+.3f} % | {r['time_s']:.1f} s |")
+        lines.append(line)
+        print(line, flush=True)
+    a = np.abs([r["change"] for r in rows])
+    tail = ["", f"|change|: max {100 * a.max():.3f} % ({rows[int(a.argmax())]['case']}), "
+            f"median {100 * np.median(a):.3f} % over {len(rows)} cases"]
+    if args.decisions is not None:
+        tail.append("")
+        for r in rows:
+            if abs(r["change"]) * 100 > args.decisions:
+                moved = ", ".join(f"{k} {_fmt(a)} -> {_fmt(b)}" for k, (a, b) in r["moved"].items())
+                tail.append(f"{r['case']} ({100 * r['change']:+.2f} %): {moved or 'none'}")
+    for line in tail:
+        print(line, flush=True)
+    if args.out:
+        C.write_text(args.out, "\n".join(lines + tail) + "\n")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,89 @@
+"""Monotone in the noise, and against a tuned Taubin filter at low noise (issue 26's guard).
+
+For every clean mesh of the shared set (``--meshes``), white Gaussian noise (32) along the
+normals (``--direction``) at each level of ``--levels`` (mean edge lengths, seed 1): the MSAE
+(deg²) of ``mr.denoise`` at its defaults, and of the best Taubin λ|μ filter over a grid of
+pair counts (the oracle: it knows the truth). A row is flagged ``NOT MONOTONE`` where a higher
+level gives a lower MSAE than a lower one, and ``> Taubin`` where the defaults lose to the
+tuned filter.
+
+    python benchmarks/monotone.py                       # every mesh < 60k vertices, 4 levels
+    python benchmarks/monotone.py --meshes bunny spot --levels 0.05 0.1 0.2 --json out.json
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import time
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+import _common as C  # noqa: E402, I001  (sets the thread env vars before numpy is imported)
+import numpy as np  # noqa: E402
+
+MESHES = ["fandisk", "twelve", "sharp_sphere", "trim_star", "rocker_arm", "screwdriver",
+          "bunny", "nicolo", "nefertiti", "camelhead", "spot", "kinect_pyramid"]
+TAUBIN_PAIRS = (1, 2, 3, 5, 8, 12, 18, 27, 40, 60)
+
+
+def tuned_taubin(Vn, F, Vt):
+    from meshrepair.baselines import taubin_smooth
+    from meshrepair.metrics import msae
+
+    best = (float("inf"), 0)
+    for k in TAUBIN_PAIRS:
+        m = msae(taubin_smooth(Vn, F, iterations=k), Vt, F)
+        best = min(best, (m, k))
+    return best
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--meshes", nargs="*", default=MESHES)
+    ap.add_argument("--levels", nargs="*", type=float, default=[0.05, 0.1, 0.2, 0.3])
+    ap.add_argument("--direction", default="normal", choices=["normal", "random"])
+    ap.add_argument("--seed", type=int, default=1)
+    ap.add_argument("--json", help="write the rows as JSON")
+    args = ap.parse_args(argv)
+    C.limit_threads(1)
+    import meshrepair as mr
+
+    rows = []
+    print("| mesh | γ | defaults MSAE | tuned Taubin MSAE (pairs) | ratio | flags |")
+    print("|---|---:|---:|---:|---:|---|")
+    for name in args.meshes:
+        Vt, F, _ = C.read(name)
+        prev = None
+        for g in args.levels:
+            Vn = mr.add_noise(Vt, F, g, direction=args.direction, seed=args.seed)
+            t = time.perf_counter()
+            r = mr.denoise(Vn, F)
+            dt = time.perf_counter() - t
+            m = mr.msae(r.V, Vt, F)
+            mt, kt = tuned_taubin(Vn, F, Vt)
+            flags = []
+            if prev is not None and m < prev:
+                flags.append("NOT MONOTONE")
+            if m > mt:
+                flags.append("> Taubin")
+            prev = m
+            rows.append({"mesh": name, "gamma": g, "direction": args.direction, "msae": m,
+                         "taubin": mt, "taubin_pairs": kt, "seconds": dt,
+                         "willmore_weight": r.params.get("willmore_weight"),
+                         "presmooth_steps": r.params.get("presmooth_steps"),
+                         "flags": flags})
+            print(f"| {name} | {g:g} | {m:.2f} | {mt:.2f} ({kt}) | {m / mt:.2f} | "
+                  f"{', '.join(flags)} |", flush=True)
+    ratios = np.array([r["msae"] / r["taubin"] for r in rows])
+    nm = sum("NOT MONOTONE" in r["flags"] for r in rows)
+    print(f"\nmedian ratio to tuned Taubin {np.median(ratios):.2f}; worse than Taubin in "
+          f"{int((ratios > 1).sum())} of {len(rows)}; non-monotone steps {nm}")
+    if args.json:
+        Path(args.json).write_text(json.dumps(rows, indent=1))
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -1,0 +1,397 @@
+"""The reading and the plan of a denoise call (:func:`_plan`): the options checked, the noise
+level and its outliers (:func:`~meshrepair.model.noise.noise_statistics`), the fold-overs, the
+robust probe deciding the crease-supported region C (5), the noise's direction
+(:func:`~meshrepair.denoise.scale.tangential_ratio`) and its correlation across scales
+(:func:`~meshrepair.denoise.scale.noise_scale`), and every decision read from them; the result
+is a frozen :class:`~meshrepair.denoise.plan.DenoisePlan`. The main solve is
+:mod:`meshrepair.denoise.execute`'s.
+"""
+
+from __future__ import annotations
+
+import logging
+from dataclasses import dataclass, replace
+from typing import Any
+
+import numpy as np
+
+from meshrepair.denoise import coarse_lowpass as _clp
+from meshrepair.denoise import crease_network as _cn
+from meshrepair.denoise import scalefree as _sf
+from meshrepair.denoise.folds import fidelity_data, unfolded_data_after_probe
+from meshrepair.denoise.plan import Decision, DenoisePlan
+from meshrepair.denoise.regions import flat_edges
+from meshrepair.denoise.rules import (
+    CAD_SUPPORT,
+    CAD_WILLMORE,
+    FLAT_A,
+    FLAT_SPREAD_DEFAULT,
+    HEAVY_NOISE,
+    HEAVY_SLOPE,
+    IMPULSIVE_RATIO,
+    PROBE_EARLY_STOP,
+    PROBE_MAX_ITERS,
+    TANGENTIAL_MAX,
+    WARM_IMPULSIVE_GAMMA,
+    huber_from_noise,
+    inner_iters_from_scale,
+    is_impulsive,
+    lambda_from_noise,
+    outside_weight,
+    robust_a_from_noise,
+    robust_iters_from_noise,
+    warm_start_from_probe,
+    willmore_weight_from_scale,
+)
+from meshrepair.denoise.scale import noise_scale, tangential_ratio
+from meshrepair.mesh.reorder import locality_order
+from meshrepair.model.noise import noise_statistics
+from meshrepair.model.relax import untangle
+from meshrepair.model.schedule import default_stages
+from meshrepair.model.solver import ADMMSolver, SolverOptions
+
+log = logging.getLogger("meshrepair.denoise.run")
+
+REORDER_MIN_VERTICES = 200_000
+"""Meshes this large are solved in a Morton (Z-curve) order of vertices and faces: every kernel
+is memory-bound there, and the reordering measured 1.33 s instead of 1.76 s per iteration on a
+1.18M-vertex subdivided mesh. Smaller meshes keep their order (results then do not depend on a
+coordinate-dependent ordering, which keeps the rotation test exact to rounding)."""
+
+
+@dataclass
+class _State:
+    """What the reading leaves for the executor: arrays in the solve's (possibly Morton) order
+    and in input order, the probe's result, and the reading's record ``info``."""
+
+    topo: Any
+    report: Any
+    gamma: float
+    gamma_rms: float
+    impulsive: bool
+    n_unf: int
+    reorder: bool
+    Fw: np.ndarray
+    topo_w: Any
+    pf: Any
+    inv: Any
+    Vw: np.ndarray
+    Vd: np.ndarray
+    Vi: Any
+    opts_kw: dict
+    force: Any
+    flat: Any
+    anchor: Any
+    sup: Any
+    sup_v: Any
+    r1: Any
+    r1_V: Any
+    info: dict
+    auto_robust: bool
+    auto_inner: bool
+    robust_iters: int
+    probe: bool
+    presmoothed: bool
+    presmooth: dict | None = None
+
+
+def _checked(lam, th, a, robust_iters, feature_iters, mask_update_every, min_feature_edges, tol,
+             unfold, inner_solver, inner_iters, n_solver, stages, huber_delta, willmore_weight,
+             regions, polish) -> dict:
+    """Every option checked (finite, in range) before any work on the mesh."""
+    from meshrepair.options import check_bool, check_int, check_number
+
+    o = dict(
+        lam=check_number("lam", lam, low=0, allow_none=True),
+        th=th,
+        a=check_number("a", a, low=0, low_open=True),
+        robust_iters=check_int("robust_iters", robust_iters, low=0, allow_none=True),
+        feature_iters=check_int("feature_iters", feature_iters, low=0),
+        mask_update_every=check_int("mask_update_every", mask_update_every, low=0),
+        min_feature_edges=check_int("min_feature_edges", min_feature_edges, low=1),
+        inner_iters=check_int("inner_iters", inner_iters, low=1, allow_none=True),
+        tol=check_number("tol", tol, low=0, low_open=True),
+        unfold=check_bool("unfold", unfold),
+        inner_solver=inner_solver,
+        n_solver=n_solver,
+        stages=None if stages is None else tuple(stages),
+        huber_delta=check_number("huber_delta", huber_delta, low=0, low_open=True,
+                                 allow_none=True),
+        willmore_weight=check_number("willmore_weight", willmore_weight, low=0, low_open=True,
+                                     allow_none=True),
+        regions=check_bool("regions", regions),
+        polish=check_bool("polish", polish),
+    )
+    SolverOptions(th=th, tol=o["tol"], inner_solver=inner_solver,
+                  inner_iters=3 if o["inner_iters"] is None else o["inner_iters"],
+                  n_solver=n_solver, mask_update_every=o["mask_update_every"],
+                  min_feature_edges=o["min_feature_edges"],
+                  **({"stages": o["stages"]} if o["stages"] else {})).validate()
+    return o
+
+
+def _plan(V, F, *, lam, th, a, robust_iters, feature_iters, mask_update_every,
+          min_feature_edges, tol, unfold, inner_solver, inner_iters, n_solver, stages,
+          huber_delta, willmore_weight, regions, polish=True,
+          presmoothed: bool = False, read_from: np.ndarray | None = None,
+          capped: bool = False) -> DenoisePlan:
+    """Read ``(V, F)`` and decide (module docstring); returns the plan, runs no main solve."""
+    from meshrepair.mesh.validate import _check_mesh
+
+    options = _checked(lam, th, a, robust_iters, feature_iters, mask_update_every,
+                       min_feature_edges, tol, unfold, inner_solver, inner_iters, n_solver,
+                       stages, huber_delta, willmore_weight, regions, polish)
+    stages = options["stages"]
+    auto_inner = inner_iters is None
+    inner_iters = 3 if auto_inner else options["inner_iters"]
+    dec: list[Decision] = []
+    report, topo = _check_mesh(V, F, name="input mesh")
+    Vr = V if read_from is None else read_from  # the readings' vertices
+    gamma, gamma_rms = noise_statistics(Vr, F, topo)
+    impulsive = is_impulsive(gamma, gamma_rms)
+    lam_used = lambda_from_noise(gamma) if lam is None else float(lam)
+    delta = huber_from_noise(gamma, gamma_rms) if huber_delta is None else float(huber_delta)
+    rule = (f"huber_from_noise: 2 γ̂_rms when γ̂_rms > {IMPULSIVE_RATIO:g} γ̂ (impulsive), "
+            "else 0")
+    dec.append(Decision("huber_delta", delta, "set by the user" if huber_delta is not None
+                        else rule, {"gamma": gamma, "gamma_rms": gamma_rms},
+                        huber_delta is not None))
+    opts_kw = dict(lam=lam_used, huber_delta=delta, th=th, tol=tol, inner_solver=inner_solver,
+                   inner_iters=inner_iters, n_solver=n_solver,
+                   mask_update_every=mask_update_every, min_feature_edges=int(min_feature_edges))
+    SolverOptions(**opts_kw).validate()  # fail fast on bad options
+    log.info("denoise: %d vertices, %d faces, noise estimate %.3f (rms %.3f), lambda %.3g",
+             len(V), len(F), gamma, gamma_rms, lam_used)
+    Vs = V
+    n_unf = 0
+    if unfold:
+        from meshrepair.model.relax import locally_flipped_faces
+
+        n_unf = int(locally_flipped_faces(V, topo).sum())
+        if n_unf:
+            Vs, left = untangle(V, topo)
+            log.info("unfolded %d folded-over faces (%d left)", n_unf - left, left)
+    auto_robust = robust_iters is None and stages is None
+    if robust_iters is None:
+        robust_iters = robust_iters_from_noise(max(gamma, gamma_rms), n_unf / max(len(F), 1))
+    probe = stages is None and regions
+    if stages is None:
+        stages = default_stages(robust_iters=int(robust_iters), feature_iters=int(feature_iters),
+                                a=a, flat_a=FLAT_A if regions else 0.0,
+                                robust_a=robust_a_from_noise(max(gamma, gamma_rms)))
+        dec.append(Decision("robust_iters", int(robust_iters), "set by the user"
+                            if not auto_robust else "robust_iters_from_noise: clip(130 γ̂, 10, "
+                            "40); 40 with > 1 % folded faces; 40 + "
+                            f"{HEAVY_SLOPE:g} (γ̂ − {HEAVY_NOISE:g}) up to 120 above "
+                            f"γ̂ = {HEAVY_NOISE:g}",
+                            {"gamma_max": max(gamma, gamma_rms),
+                             "folded_fraction": n_unf / max(len(F), 1)}, not auto_robust))
+    else:
+        dec.append(Decision("stages", len(stages), "set by the user: no probe, no region "
+                            "decisions", by_user=True))
+    reorder = len(V) >= REORDER_MIN_VERTICES
+    pf = inv = None
+    if reorder:  # run on a cache-friendly copy, map the result back exactly
+        pv, pf = locality_order(Vs, F)
+        inv = np.empty_like(pv)
+        inv[pv] = np.arange(len(pv))
+        Fw, Vw, Vd = inv[F][pf], Vs[pv], V[pv]
+        from meshrepair.mesh.topology import edge_topology
+
+        topo_w = edge_topology(Fw, len(V))
+    else:
+        Fw, Vw, Vd, topo_w = F, Vs, V, topo
+    Vd = fidelity_data(Vd, Vw, impulsive)
+    Vi = None if Vd is Vw else Vw
+    info = {"tangential_ratio": float("nan"), "support_fraction": float("nan"),
+            "outside_weight": 1.0,
+            "willmore_weight": 1.0, "noise_rho": float("nan"), "noise_length": float("nan"),
+            "noise_gamma_scale": float("nan")}
+    force = flat = anchor = None
+    sup = r1 = r1_V = None
+    sup_v = None  # vertices of the crease-supported region, input order
+    w_out = 1.0
+    ww = 1.0 if willmore_weight is None else float(willmore_weight)
+    rule_lam = "lambda_from_noise: clip(0.02 / γ̂², 0.05, 1)"
+    if probe and stages[0].max_iter > 0:
+        n1 = int(min(stages[0].max_iter, PROBE_MAX_ITERS))
+        st1 = replace(stages[0], max_iter=n1, min_iter=min(stages[0].min_iter, n1))
+        # the probe is one stage: its switch rule, in edge units, is the stop rule
+        q_edges = _sf.radius_in_edges(V, F, topo.edges)  # the mesh's radius in edge lengths
+        kw1 = {**opts_kw, "tol": _sf.probe_tol(st1, q_edges) if PROBE_EARLY_STOP else tol}
+        Vn_w = V[pv] if reorder else V
+        Vt_w = Vr[pv] if reorder else Vr  # the tangential ratio's vertices
+
+        def run_probe(kw):
+            """The probe: to the relative stop, then on to the scale-free stop only when that
+            probe already reads crease support (:func:`scalefree.gated_probe`)."""
+            if not (PROBE_EARLY_STOP and _sf.two_phase(q_edges)):
+                return ADMMSolver(Fw, len(V), options=SolverOptions(stages=(st1,), **kw),
+                                  topo=topo_w).solve(Vd, Vi)
+            return _sf.gated_probe(ADMMSolver, SolverOptions, Fw, len(V), topo_w, st1, kw,
+                                   Vd, Vi, q_edges, th)
+
+        r1 = run_probe(kw1)
+        tr = tangential_ratio(Vt_w, Fw, r1.V, topo=topo_w)
+        ns = noise_scale(Vn_w, Fw, reference=r1.V, topo=topo_w)
+        if willmore_weight is None:
+            ww = _clp.keep_white(willmore_weight_from_scale(ns.rho, impulsive, tr), capped)
+        rule = (f"willmore_weight_from_scale: clip(1 + 150 (ρ − 1.12), 1, 16) for noise "
+                f"along the normals (r_t < {TANGENTIAL_MAX:g}), not impulsive; else 1")
+        dec.append(Decision("willmore_weight", ww, "set by the user" if willmore_weight
+                            is not None else rule, {"rho": ns.rho, "tangential_ratio": tr,
+                                                    "impulsive": float(impulsive)},
+                            willmore_weight is not None))
+        if auto_inner and ww > 1.0:  # correlated noise: more V-steps for its long waves,
+            inner_iters = inner_iters_from_scale(ns.length)  # in the probe too (its creases)
+            opts_kw["inner_iters"] = inner_iters
+            if inner_iters != kw1["inner_iters"]:
+                kw1["inner_iters"] = inner_iters
+                r1 = run_probe(kw1)
+                tr = tangential_ratio(Vt_w, Fw, r1.V, topo=topo_w)
+        r1_V = r1.V[inv] if reorder else r1.V
+        cs = getattr(r1, "crease_support", None)  # the gate's read on these normals
+        sup, net = cs if cs is not None else _cn.supported(topo_w, r1.N, th=th)
+        info.update(network_branching=net.branching, network_side_spread=net.side_spread,
+                    network_dropped=net.dropped, network_rejected=net.rejected)
+        force = np.where(sup, -1, 0).astype(np.int8)
+        sup_v = np.zeros(len(V), bool)
+        sup_v[topo_w.edges[sup].ravel()] = True
+        if reorder:
+            sup_v = sup_v[inv]
+        flat = flat_edges(topo_w, r1.N, sup, max_spread=FLAT_SPREAD_DEFAULT)
+        if tr < TANGENTIAL_MAX and sup.any():  # noise along the normals: anchor the CAD region
+            anchor = np.zeros(len(V))
+            anchor[topo_w.edges[sup].ravel()] = 1.0
+        dec.append(Decision("tangential_anchor", anchor is not None,
+                            "on C when the noise lies along the normals (r_t < "
+                            f"{TANGENTIAL_MAX:g})",
+                            {"tangential_ratio": tr, "crease_edges": float(sup.sum())}))
+        info["tangential_ratio"] = tr
+        sf = _sf.cad_support(topo_w, r1.N, sup, q_edges, th=th)  # scale-free CAD support
+        if n_unf and Vd is Vw and not unfolded_data_after_probe(impulsive, tr, sf):
+            Vd, Vi = Vn_w, Vw  # noise with a tangential part: the input is the main run's data
+        if lam is None and ww > 1.0:  # correlated noise: λ from its level at its own scale
+            lam_used = lambda_from_noise(max(gamma, ns.gamma))
+            opts_kw["lam"] = lam_used
+            rule_lam = "lambda_from_noise at the noise's own scale: max(γ̂, γ̂_scale)"
+        w_out = outside_weight(sf, tr) if willmore_weight is None else 1.0
+        info["outside_weight"] = w_out
+        rule = (f"outside_weight: {CAD_WILLMORE:g} off the creases of a CAD part (crease "
+                f"support ≥ {CAD_SUPPORT:g}) with noise along the normals (r_t < "
+                f"{TANGENTIAL_MAX:g}); else 1")
+        dec.append(Decision("outside_weight", w_out, rule, {"support_fraction": sf,
+                                                            "tangential_ratio": tr}))
+        from meshrepair.denoise import organic_fidelity as _of
+
+        if lam is None and _of.applies(sf, ww, w_out, impulsive, ns.rho):
+            lam_used = _of.main_lambda(gamma, tr, info, graded=not presmoothed)
+            opts_kw["lam"] = lam_used
+            rule_lam = "organic_fidelity.main_lambda: λ of an organic mesh with white noise"
+        info.update(support_fraction=sf, willmore_weight=ww,
+                    noise_rho=ns.rho, noise_length=ns.length, noise_gamma_scale=ns.gamma)
+        log.info("crease support on %.1f %% of the edges; noise correlation %.2f (length %.1f, "
+                 "level %.3f); willmore weight %g", 100 * sup.mean(), ns.rho, ns.length,
+                 ns.gamma, ww)
+    else:
+        dec.append(Decision("probe", False, "off: custom stages or regions=False" if
+                            (options["stages"] is not None or not regions) else
+                            "off: a robust stage of 0 iterations",
+                            by_user=options["stages"] is not None or not regions))
+    lam_reads = {"gamma": gamma}
+    if np.isfinite(info["noise_gamma_scale"]):
+        lam_reads["gamma_scale"] = info["noise_gamma_scale"]
+    dec.insert(0, Decision("lam", lam_used, "set by the user" if lam is not None else rule_lam,
+                           lam_reads, lam is not None))
+    if inner_iters != 3 or not auto_inner:
+        dec.append(Decision("inner_iters", inner_iters, "set by the user" if not auto_inner else
+                            "inner_iters_from_scale: more V-steps for correlated noise",
+                            {"noise_length": info["noise_length"]}, not auto_inner))
+    st = _State(topo=topo, report=report, gamma=gamma, gamma_rms=gamma_rms, impulsive=impulsive,
+                n_unf=n_unf, reorder=reorder, Fw=Fw, topo_w=topo_w, pf=pf, inv=inv, Vw=Vw,
+                Vd=Vd, Vi=Vi, opts_kw=opts_kw, force=force, flat=flat, anchor=anchor, sup=sup,
+                sup_v=sup_v, r1=r1, r1_V=r1_V, info=info, auto_robust=auto_robust,
+                auto_inner=auto_inner, robust_iters=int(robust_iters), probe=bool(probe),
+                presmoothed=bool(presmoothed))
+    kp = 0
+    inner_plan = None
+    if sup_v is not None and willmore_weight is None and lam is None and not presmoothed:
+        kp, inner_plan = _plan_presmooth(V, F, st, options, capped_run=capped, dec=dec)
+    elif sup_v is not None and not presmoothed:
+        dec.append(Decision("presmooth_steps", 0, "off: lam or willmore_weight set by the "
+                            "user (the coarse-to-fine low-pass and the correlated low-pass "
+                            "read automatic weights only)", by_user=True))
+    warm = r1_V is not None and warm_start_from_probe(impulsive, info["outside_weight"], gamma)
+    if r1_V is not None:
+        dec.append(Decision("start_from_probe", bool(warm), "warm_start_from_probe: impulsive "
+                            "noise on a CAD part (outside weight > 1) above γ̂ = "
+                            f"{WARM_IMPULSIVE_GAMMA:g} starts the main solve from the probe",
+                            {"impulsive": float(impulsive), "outside_weight": w_out,
+                             "gamma": gamma}))
+    dec.append(Decision("fidelity_data", "input" if (Vd is not Vw or not n_unf) else
+                        "unfolded", "fidelity_data / unfolded_data_after_probe: the unfolded "
+                        "input for impulsive noise along the normals", {"folded": n_unf}))
+    if reorder:
+        dec.append(Decision("reorder", True, f"Morton order: ≥ {REORDER_MIN_VERTICES} vertices",
+                            {"vertices": len(V)}))
+    reading = {"gamma": gamma, "gamma_rms": gamma_rms, "impulsive": bool(impulsive),
+               "folded_faces": n_unf, **{k: info[k] for k in
+                                         ("tangential_ratio", "support_fraction", "noise_rho",
+                                          "noise_length", "noise_gamma_scale")}}
+    return DenoisePlan(
+        n_vertices=len(V), n_faces=len(F), options=options, reading=reading, lam=lam_used,
+        huber_delta=delta, willmore_weight=ww, outside_weight=w_out, inner_iters=inner_iters,
+        stages=tuple(stages), start_from_probe=bool(warm), presmooth_steps=int(kp),
+        polish=options["polish"], decisions=tuple(dec), inner=inner_plan, _state=st)
+
+
+def _plan_presmooth(V, F, st: _State, options: dict, *, capped_run: bool, dec: list):
+    """The coarse-to-fine decision: Taubin pairs ``k`` on the input for heavy noise on an
+    organic mesh (:func:`presmooth_steps`), capped at the mesh's resolution, the length read
+    from the relief and checked by its risk; with ``k > 0`` the plan of the low-passed input."""
+    from meshrepair.denoise.heavylength import heavy_length
+    from meshrepair.denoise.lengthcheck import checked_length
+    from meshrepair.denoise.presmooth import presmooth, presmooth_steps
+
+    info, topo = st.info, st.topo
+    kp = presmooth_steps(st.gamma, info["tangential_ratio"],
+                         support_fraction=info["support_fraction"],
+                         outside=info["outside_weight"], willmore=info["willmore_weight"],
+                         impulsive=st.impulsive,
+                         heavy=_cn.heavy_from_network(info["network_rejected"]))
+    kp0, kp = kp, _clp.capped_steps(kp, st.r1_V, F, topo.edges)
+    reads = {"gamma": st.gamma, "tangential_ratio": info["tangential_ratio"],
+             "support_fraction": info["support_fraction"], "steps_before_cap": kp0}
+    if not kp:
+        dec.append(Decision("presmooth_steps", 0, "presmooth_steps: heavy noise on an organic "
+                            "mesh only", reads))
+        return 0, None
+    kc = kp  # the resolution cap's length; the relief read may shorten it further
+    Vk = presmooth(V, topo.edges, np.ones(len(V), bool), kc)
+    kp, Vp, hc, hw = heavy_length(V, F, topo.edges, st.gamma, info["tangential_ratio"], kp,
+                                  Vk=Vk)
+    kp, Vp, hd = checked_length(V, F, topo.edges, kp, Vp, kc, hw, X_long=Vk)
+    log.info("heavy noise on an organic mesh: %d Taubin pairs on the input first", kp)
+    from meshrepair.denoise import layoutkeep as _lk
+
+    Vread = Vp
+    if _lk.LAYOUT_KEEP and _lk.PRESMOOTH_KEEP:  # the input's vertex layout back
+        Vp = _lk.apply(Vp, V, F, topo.edges, info["tangential_ratio"])
+    o = options
+    inner = _plan(Vp, F, lam=None, th=o["th"], a=o["a"],
+                  robust_iters=None if st.auto_robust else o["robust_iters"],
+                  feature_iters=o["feature_iters"], mask_update_every=o["mask_update_every"],
+                  min_feature_edges=o["min_feature_edges"], tol=o["tol"], unfold=o["unfold"],
+                  inner_solver=o["inner_solver"],
+                  inner_iters=None if st.auto_inner else o["inner_iters"],
+                  n_solver=o["n_solver"], stages=None, huber_delta=o["huber_delta"],
+                  willmore_weight=None, regions=o["regions"], polish=False,
+                  presmoothed=True, read_from=Vread, capped=kc < kp0)
+    st.presmooth = {"Vp": Vp, "steps": int(kp), "roughness": hc, "tangential_weight": hw,
+                    "risk_difference": hd}
+    dec.append(Decision("presmooth_steps", int(kp), "presmooth_steps → capped_steps → "
+                        "heavy_length → checked_length: heavy noise on an organic mesh is "
+                        "low-passed first, the whole model then runs on the result",
+                        {**reads, "steps_after_cap": kc, "roughness": hc,
+                         "tangential_weight": hw, "risk_difference": hd}))
+    return kp, inner

@@ -1,0 +1,164 @@
+"""A longer low-pass where the surface is smooth at the mesh's resolution .
+
+On an organic mesh with white noise the defaults end with a short low-pass
+(:mod:`meshrepair.denoise.lowpass`, ``k = round((γ̂/0.13)²)`` pairs) because a longer one smooths
+away the fine relief of scanned surfaces. A surface sampled finely with respect to its
+*curvature variation* (a smooth subdivision-like surface) has no such relief: its mean
+curvature changes over many rings, so an isotropic filter at the noise's length only removes
+noise there.
+
+**The read** (sampling density of the curvature field). With ``W`` the uniform umbrella operator,
+``T`` one full Taubin λ|μ pair (:mod:`meshrepair.denoise.lowpass`), ``X = T^m V`` the result after
+``m = 8`` such pairs and ``n`` the vertex normals of ``X``, the two-step curvature proxy and its
+variation are
+
+.. math::  h = \\langle X - W^2 X,\\; n\\rangle, \\qquad
+           c = \\frac{\\lVert h - W^2 h\\rVert_2}{\\lVert h\\rVert_2},
+
+a dimensionless ratio (invariant to scaling, rotation and translation of the mesh; 0 on a
+sphere of uniform sampling, where ``h`` is constant, and growing towards √2 as ``h`` becomes
+white): how much the curvature changes from a two-ring neighbourhood to the next relative to
+its own size, at the scale of the filter ``T^m`` (√m ≈ 3 rings). The ``m`` pairs remove what
+the solve and the earlier finishes left of the noise, which otherwise decides ``c``: read on
+the result itself (``m = 0``) it varies with the noise level and with how much the finishes
+smoothed, while after the ``m`` pairs it reads within about ±0.02 of the clean surface's own
+value (after the same pairs) across noise levels; smooth surfaces read about 0.16-0.18,
+scanned relief 0.2-0.35.
+
+**The rule** (:func:`coarse_steps`): on an organic mesh (crease support below
+:data:`meshrepair.denoise.rules.CAD_SUPPORT`, outside weight 1) with white, non-impulsive noise
+(Willmore weight 1), when ``c < c_0 = 0.185``:
+
+.. math:: k = \\mathrm{clip}\\bigl(\\mathrm{round}((γ̂/γ_c)^2), 0, K_{max}\\bigr),
+          \\qquad γ_c = 0.06,\\ K_{max} = 24,
+
+full (tangential too) Taubin λ|μ pairs (:func:`meshrepair.denoise.lowpass.taubin_region`) on every
+vertex, after the organic finish (as in :mod:`meshrepair.denoise.presmooth`, the probe's short
+"crease" chains on an organic mesh are noise, so none is kept fixed). The width √k ∝ γ̂ as in
+:mod:`meshrepair.denoise.lowpass`; ``γ_c`` and ``c_0`` were chosen on the benchmark grid
+(docs/parameters.md). The step is projected on the vertex normals (:func:`normal_only`) when
+the noise lies along the normals at a low level (``r_t < 0.65`` and ``γ̂ ≤ 0.13``, the gates of
+:mod:`meshrepair.denoise.lowpass`): the input's tangential layout is then exact and the solve
+left no drift, so the vertex error E_V does not grow.
+
+On the low-passed input of the coarse-to-fine run (:mod:`meshrepair.denoise.presmooth`) γ̂ reads
+0.03-0.06, so ``k`` is 0 or 1 there.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+COARSE = True
+C_0 = 0.185
+READ_STEPS = 8
+GAMMA_C = 0.06
+MAX_STEPS = 24
+
+
+def curvature_roughness(V: np.ndarray, F: np.ndarray, edges: np.ndarray, *,
+                        steps: int = READ_STEPS) -> float:
+    """``c = ‖h − W²h‖ / ‖h‖`` of the module docstring on ``T^steps V`` (NaN on a flat mesh,
+    ``h = 0``).
+
+    Parameters
+    ----------
+    V : (nV, 3) float64
+    F : (nF, 3) int64
+    edges : (nE, 2) int64, the mesh's edges
+    steps : full Taubin pairs applied before the read (``m``; 0 reads ``V`` itself)
+
+    Returns
+    -------
+    float
+    """
+    from meshrepair.denoise.lowpass import taubin_region, umbrella
+    from meshrepair.mesh.geometry import vertex_normals
+
+    V = np.asarray(V, dtype=np.float64)
+    if steps > 0:
+        V = taubin_region(V, edges, np.ones(len(V), bool), int(steps))
+    W = umbrella(edges, len(V))
+    n = vertex_normals(V, F)
+    h = np.einsum("ij,ij->i", V - W @ (W @ V), n)
+    den = float(np.linalg.norm(h))
+    if not den > 0:
+        return float("nan")
+    return float(np.linalg.norm(h - W @ (W @ h)) / den)
+
+
+def coarse_steps(gamma: float, roughness: float, *, support_fraction: float, outside: float,
+                 willmore: float, impulsive: bool) -> int:
+    """λ|μ pairs ``k`` of the module docstring; 0 when the gate does not fire."""
+    from meshrepair.denoise.rules import CAD_SUPPORT
+
+    if not COARSE or impulsive or outside != 1.0 or willmore != 1.0:
+        return 0
+    if not (support_fraction < CAD_SUPPORT) or not np.isfinite(gamma):
+        return 0
+    if not (np.isfinite(roughness) and roughness < C_0):
+        return 0
+    return int(np.clip(round((float(gamma) / GAMMA_C) ** 2), 0, MAX_STEPS))
+
+
+def normal_only(tangential: float, gamma: float) -> bool:
+    """Noise along the normals (``r_t < 0.65``) at a low level (``γ̂ ≤ 0.13``): the step of
+    :func:`meshrepair.denoise.lowpass.taubin_region` is projected on the vertex normals."""
+    from meshrepair.denoise.lowpass import TANGENTIAL_GAMMA
+    from meshrepair.denoise.rules import TANGENTIAL_MAX
+
+    return bool(np.isfinite(tangential) and tangential < TANGENTIAL_MAX
+                and gamma <= TANGENTIAL_GAMMA)
+
+
+
+FOLD_RINGS = 2
+
+
+def free_vertices(V: np.ndarray, F: np.ndarray, topo, rings: int = FOLD_RINGS) -> np.ndarray:
+    """The vertices the low-pass may move: all but those of faces still folded in ``V``
+    (:func:`meshrepair.model.relax.locally_flipped_faces`) and ``rings`` rings around them (an
+    umbrella step across a fold spreads it)."""
+    from meshrepair.mesh.topology import vertex_adjacency
+    from meshrepair.model.relax import locally_flipped_faces
+
+    folded = locally_flipped_faces(V, topo)
+    fixed = np.zeros(len(V), bool)
+    if folded.any():
+        fixed[np.asarray(F)[folded].ravel()] = True
+        A = vertex_adjacency(topo.edges, len(V))
+        for _ in range(int(rings)):
+            fixed = fixed | (A @ fixed.astype(np.float64) > 0)
+    return ~fixed
+
+
+def coarse_lowpass(V: np.ndarray, F: np.ndarray, topo, steps: int, *, normal: bool,
+                   unfold: bool = True, reference: np.ndarray | None = None,
+                   layout: np.ndarray | None = None,
+                   tangential: float = float("nan")) -> np.ndarray:
+    """``steps`` λ|μ pairs of :func:`meshrepair.denoise.lowpass.taubin_region` (projected on the
+    vertex normals when ``normal``); a new array.
+
+    With ``unfold`` the faces folded in ``V`` are first unfolded
+    (:func:`meshrepair.denoise.folds.unfold_result`, which ``denoise`` runs after the finish
+    anyway, with the same per-cluster check against ``reference``, the robust probe's result:
+    a fold the probe holds too is kept): the filter then acts on the unfolded surface, as it
+    would after the unfolding, on every vertex: a filter across folded faces spreads the fold,
+    and the folds the probe holds too are not features on a surface that is smooth at the
+    mesh's resolution. Without ``unfold`` (the folds ``denoise`` keeps on purpose after the
+    re-integration from the input) the faces folded in ``V`` and :data:`FOLD_RINGS` rings
+    around them do not move (:func:`free_vertices`). With ``layout`` (the run's input) the full
+    step's surface is resampled at that layout (:func:`meshrepair.denoise.layoutkeep.apply`,
+    which reads ``tangential``, r_t); the normal-only step keeps the layout already.
+    """
+    from meshrepair.denoise.folds import unfold_result
+    from meshrepair.denoise.layoutkeep import apply as keep_layout
+    from meshrepair.denoise.lowpass import taubin_region
+
+    if unfold:
+        V, _ = unfold_result(V, topo, reference)
+        free = np.ones(len(V), bool)
+    else:
+        free = free_vertices(V, F, topo)
+    X = taubin_region(V, topo.edges, free, int(steps), F=F if normal else None)
+    return X if normal else keep_layout(X, layout, F, topo.edges, tangential, free)

@@ -1,0 +1,220 @@
+"""The execution of a :class:`~meshrepair.denoise.plan.DenoisePlan` (:func:`_execute`): the
+coarse-to-fine low-pass when the plan has one, the main ADMM solve of energy (6) by (17)-(21)
+ending by rule (35), the discrepancy principle on the outside weight and the collapse fallback,
+then the finish after the solve (:func:`meshrepair.denoise.finish.finish_result`), the result's
+fold-overs and the correlated-noise low-pass.
+"""
+
+from __future__ import annotations
+
+import logging
+from dataclasses import replace
+
+import numpy as np
+
+from meshrepair.denoise.analysis import _State
+from meshrepair.denoise.finish import REINTEGRATE_KEEPS_FOLDS, finish_result
+from meshrepair.denoise.folds import (
+    COLLAPSE_VOLUME_RATIO,
+    UNFOLD_RESULT,
+    _volume_ratio,
+    unfold_result,
+)
+from meshrepair.denoise.plan import Decision, DenoisePlan
+from meshrepair.denoise.result import DenoiseResult
+from meshrepair.denoise.rules import FLAT_A, lambda_from_noise, robust_a_from_noise
+from meshrepair.errors import MeshRepairError
+from meshrepair.mesh.reorder import _edge_values_to
+from meshrepair.model.schedule import default_stages
+from meshrepair.model.solver import ADMMSolver, SolverOptions
+
+log = logging.getLogger("meshrepair.denoise.run")
+
+
+def _execute(plan: DenoisePlan, V, F, callback=None) -> DenoiseResult:
+    """Run ``plan`` on ``(V, F)`` (the mesh it was made from; module docstring)."""
+    st: _State = plan._state
+    if st is None or plan.n_vertices != len(V) or plan.n_faces != len(F):
+        raise MeshRepairError("this plan was made for another mesh: make it with "
+                              "mr.plan_denoise(V, F) on the mesh you denoise")
+    o = plan.options
+    info = dict(st.info)
+    gamma, gamma_rms, impulsive, topo = st.gamma, st.gamma_rms, st.impulsive, st.topo
+    planned = 0 if st.presmooth is None else st.presmooth["steps"]
+    if plan.presmooth_steps not in (0, planned) or (plan.presmooth_steps and plan.inner is None):
+        raise MeshRepairError(
+            f"presmooth_steps of a plan can be kept ({planned}) or set to 0, not "
+            f"{plan.presmooth_steps}: the low-passed input and its plan are made by "
+            "plan_denoise")
+    if plan.presmooth_steps:
+        r = _execute(plan.inner, st.presmooth["Vp"], F, callback)
+        r.params.update(presmooth_steps=plan.presmooth_steps,
+                        presmooth_noise_estimate=r.noise_estimate,
+                        presmooth_roughness=st.presmooth["roughness"],
+                        presmooth_tangential_weight=st.presmooth["tangential_weight"],
+                        presmooth_risk_difference=st.presmooth["risk_difference"],
+                        presmooth_network_rejected=info["network_rejected"],
+                        presmooth_tangential_ratio=info["tangential_ratio"],
+                        presmooth_noise_rho=info["noise_rho"],
+                        presmooth_noise_length=info["noise_length"],
+                        presmooth_noise_gamma_scale=info["noise_gamma_scale"],
+                        presmooth_support_fraction=info["support_fraction"])
+        r.noise_estimate = gamma
+        from meshrepair.denoise import corrlowpass as _cl
+
+        r.V = _cl.apply(r.V, F, topo, gamma, info, impulsive, V, st.r1_V)
+        r.params.update({k_: info[k_] for k_ in _cl.RECORDED})
+        r.plan = replace(plan, inner=r.plan, after_solve=_after(info, st.info, _cl.RECORDED))
+        return r
+    info["presmooth_steps"] = 0
+    reorder, inv, Fw, topo_w = st.reorder, st.inv, st.Fw, st.topo_w
+    opts_kw = {**st.opts_kw, "lam": plan.lam, "huber_delta": plan.huber_delta,
+               "inner_iters": plan.inner_iters}
+    ww, Vd, Vi, force, flat, anchor = (plan.willmore_weight, st.Vd, st.Vi, st.force, st.flat,
+                                       st.anchor)
+    sup_v, r1_V = st.sup_v, st.r1_V
+    wedges = None
+    if st.sup is not None and plan.outside_weight != 1.0:  # a CAD part: its smooth patches
+        wedges = np.where(st.sup, ww, ww * plan.outside_weight)  # get the stronger prior
+    info["outside_weight"] = plan.outside_weight
+    Vi_main = st.r1.V if plan.start_from_probe else Vi
+    info["start_from_probe"] = bool(plan.start_from_probe)
+    stages = plan.stages
+    lam_used = plan.lam
+    robust_iters = st.robust_iters
+
+    def solve(stages_):
+        """The main run; on a reordered copy the result is mapped back exactly."""
+        opts = SolverOptions(stages=tuple(stages_), willmore_weight=ww, **opts_kw)
+        res = ADMMSolver(Fw, len(V), options=opts, topo=topo_w, edge_force=force,
+                         flat_edges=flat, anchor=anchor, willmore_edges=wedges
+                         ).solve(Vd, Vi_main, callback=callback)
+        if reorder:
+            return res, res.V[inv], _edge_values_to(topo, topo_w, st.pf, res.M_E)
+        return res, res.V, res.M_E
+
+    res, V_out, M_E = solve(stages)
+    w_cad = info["outside_weight"]  # the CAD-part decision, read by the polish rule
+    info["discrepancy_ratio"] = float("nan")
+    from meshrepair.denoise import discrepancy as _dq
+
+    if wedges is not None and _dq.applies(gamma, gamma_rms) and res.stop_reason != "interrupted":
+        # the discrepancy principle on w_out: lower it where it smooths away signal
+        q = _dq.discrepancy_ratio(V, V_out, F, sup_v, clip=_dq.CLIP * gamma, edges=topo.edges)
+        info["discrepancy_ratio"] = q
+        for w_try in _dq.FALLBACK_WEIGHTS:
+            if _dq.accept_weight(q):
+                break
+            wedges = np.where(force < 0, ww, ww * w_try) if w_try != 1.0 else None
+            info["outside_weight"] = w_try
+            res, V_out, M_E = solve(stages)
+            q = _dq.discrepancy_ratio(V, V_out, F, sup_v, clip=_dq.CLIP * gamma,
+                                      edges=topo.edges)
+            log.info("outside weight lowered to %g (discrepancy ratio %.3f)", w_try, q)
+    shrink = _volume_ratio(V, V_out, F, st.report)
+    if shrink is not None and shrink < COLLAPSE_VOLUME_RATIO and res.stop_reason != "interrupted":
+        if not st.auto_robust:
+            raise MeshRepairError(
+                f"denoise collapsed this closed mesh: its volume fell to {shrink:.3g} of the "
+                f"input's ({len(V)} vertices; a mesh this coarse has no smooth regions for the "
+                "model). Try robust_iters=0 (no robust stage) or a finer mesh")
+        log.warning("denoise: the robust stage collapsed this coarse closed mesh (volume ratio "
+                    "%.3g, %d vertices); solving again without it", shrink, len(V))
+        robust_iters = 0
+        # the probe's decisions came from the collapsed robust run: drop them too
+        force = flat = anchor = wedges = sup_v = None
+        Vi_main = Vi
+        info["start_from_probe"] = False
+        info["collapse_fallback"] = True
+        ww = 1.0 if o["willmore_weight"] is None else float(o["willmore_weight"])
+        lam_used = lambda_from_noise(gamma) if o["lam"] is None else float(o["lam"])
+        opts_kw["lam"] = lam_used
+        stages = default_stages(robust_iters=0, feature_iters=int(o["feature_iters"]),
+                                a=o["a"], flat_a=FLAT_A if o["regions"] else 0.0,
+                                robust_a=robust_a_from_noise(max(gamma, gamma_rms)))
+        res, V_out, M_E = solve(stages)
+        shrink = _volume_ratio(V, V_out, F, st.report)
+        if shrink is not None and shrink < COLLAPSE_VOLUME_RATIO:
+            raise MeshRepairError(
+                f"denoise collapsed this closed mesh: its volume fell to {shrink:.3g} of the "
+                f"input's even without the robust stage ({len(V)} vertices; a mesh this coarse "
+                "has no smooth regions for the model); it cannot be denoised")
+    V_out = finish_result(V, V_out, F, topo, M_E, data=Vd[inv] if reorder else Vd,
+                          sup_v=sup_v, gamma=gamma, gamma_rms=gamma_rms, impulsive=impulsive,
+                          ww=ww, w_cad=w_cad, automatic=o["willmore_weight"] is None,
+                          polish=plan.polish, info=info, probe=r1_V)
+    n_res_folded = 0
+    if o["unfold"] and UNFOLD_RESULT and not (info["reintegrate_steps"]
+                                              and REINTEGRATE_KEEPS_FOLDS and not impulsive):
+        V_out, n_res_folded = unfold_result(V_out, topo, r1_V)
+        if n_res_folded:
+            log.info("unfolded %d faces folded over in the result", n_res_folded)
+    info.update(corr_lowpass_steps=0, band_beta=float("nan"), band_tau=float("nan"),
+                band_length=float("nan"))
+    if (sup_v is not None and o["willmore_weight"] is None and o["lam"] is None
+            and not st.presmoothed):
+        from meshrepair.denoise import corrlowpass as _cl
+
+        V_out = _cl.apply(V_out, F, topo, gamma, info, impulsive, V, r1_V)
+    params = {"lam": lam_used, "th": o["th"], "a": o["a"], "robust_iters": robust_iters,
+              "feature_iters": o["feature_iters"], "mask_update_every": o["mask_update_every"],
+              "min_feature_edges": o["min_feature_edges"], "tol": o["tol"],
+              "inner_solver": o["inner_solver"], "inner_iters": plan.inner_iters,
+              "n_solver": o["n_solver"], "unfold": o["unfold"],
+              "n_components": st.report.n_components, "reordered": reorder,
+              "huber_delta": plan.huber_delta, "impulsive": impulsive,
+              "regions": st.probe,
+              "fidelity_data": "input" if (Vd is not st.Vw or not st.n_unf) else "unfolded",
+              "result_folds_unfolded": n_res_folded, **info}
+    return DenoiseResult(
+        V=V_out, F=F, M_E=M_E, edges=topo.edges.copy(), M_V=res.M_V, history=res.history,
+        iterations=res.iterations, stop_reason=res.stop_reason, noise_estimate=gamma,
+        params=params, n_unfolded=st.n_unf,
+        plan=replace(plan, after_solve=_after(info, st.info, ())),
+    )
+
+
+_AFTER = {
+    "discrepancy_ratio": "discrepancy principle on the outside weight: normal residual outside "
+                         "C over inside it (discrepancy.py)",
+    "collapse_fallback": "the robust stage collapsed a coarse closed mesh: solved again "
+                         "without it",
+    "polished": "polish: fraction of faces under the bilateral normal filter (polish_rule)",
+    "lambda_gain": "organic fidelity: gain on λ from the noise direction (organic_fidelity.py)",
+    "lowpass_steps": "Taubin low-pass of the smooth region (lowpass.py)",
+    "reanchor_ratio": "tangential re-anchoring: residual tangential ratio (reproject.py)",
+    "reanchored": "tangential re-anchoring: vertices re-anchored",
+    "reanchor_shift": "tangential re-anchoring: mean shift, edge lengths",
+    "guidance_passes": "organic finish: one-ring guidance passes (guidance_rule)",
+    "reintegrate_steps": "organic finish: re-integration steps from the input "
+                         "(reintegrate_rule)",
+    "reanchor_ratio_after": "tangential ratio after the re-integration",
+    "residual_level_ratio": "residual noise level over the input's after the re-integration",
+    "reintegrate_rejected": "re-integration undone by its fold check",
+    "coarse_roughness": "curvature variation c of the result (coarse.py)",
+    "coarse_steps": "Taubin pairs where the result is smooth at the mesh's resolution",
+    "cad_finish_passes": "CAD finish passes (cadfinish.py)",
+    "cad_finish_gated": "CAD finish: fraction of faces it moved",
+    "sharpened": "crease sharpening: fraction kept (sharpen_rule, sharpen_decision.py)",
+    "sharpen_rho": "crease sharpening: the data's position ρ on result → candidate",
+    "sharpen_flat": "crease sharpening: flat support φ",
+    "corr_lowpass_steps": "correlated-noise low-pass: Taubin pairs (corrlowpass.py)",
+    "band_beta": "two-octave band read of the noise (corrwhite.py)",
+    "band_tau": "two-octave band read: its threshold",
+    "band_length": "two-octave band read: its length",
+    "result_folds_unfolded": "faces folded in the result, unfolded",
+}
+"""What each record of the steps after the solve means (the stage's module has the maths)."""
+
+
+def _after(info: dict, before: dict, keys) -> tuple[Decision, ...]:
+    """The decisions taken on the solve's result: every record of ``info`` the reading did not
+    hold (or that the run changed)."""
+    out = []
+    for k, v in info.items():
+        if k in ("presmooth_steps", "start_from_probe") or (
+                k in before and before[k] == v and k not in keys):
+            continue
+        if isinstance(v, (bool, int, float, str)) or v is None:
+            out.append(Decision(k, v, _AFTER.get(k, "a step after the solve")))
+    return tuple(out)

@@ -1,0 +1,139 @@
+"""The plan of a denoise call: what the reading of the input decided, printable and editable.
+
+:func:`meshrepair.plan_denoise` reads the input (noise level and direction, the robust probe's
+crease support, the noise's correlation across scales) and returns a frozen :class:`DenoisePlan`
+without the main solve; :func:`meshrepair.denoise` with ``plan=`` executes one, so a user can
+print it, change a decision with :func:`dataclasses.replace` and run it::
+
+    p = mr.plan_denoise(V, F)
+    print(p)                                   # every decision, the values read, the rule
+    r = mr.denoise(V, F, plan=replace(p, lam=0.2))
+    r.plan                                     # the plan that ran, with the decisions taken
+                                               # after the solve
+
+The editable decisions are the fields of :class:`DenoisePlan` below ``# decisions``; the
+executor derives everything else from them (for example the per-edge Willmore weights from
+``willmore_weight`` and ``outside_weight`` on the probe's crease support). The probe's arrays
+travel with the plan, hidden from its printout and from comparisons, so executing a plan never
+runs the probe again.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass, field, fields
+from typing import Any
+
+from meshrepair.model.solver import Stage
+
+
+@dataclass(frozen=True)
+class Decision:
+    """One decision of the plan.
+
+    Attributes
+    ----------
+    name : what is decided (a plan field, or a stage switched on or off)
+    value : the outcome
+    rule : the rule that decided it, one line (its function and threshold), or who set it
+    reads : the measured values the rule read, by name
+    by_user : True when the user's option set it (the rule did not run)
+    """
+
+    name: str
+    value: Any
+    rule: str
+    reads: Mapping[str, float] = field(default_factory=dict)
+    by_user: bool = False
+
+    def line(self) -> str:
+        reads = ", ".join(f"{k} {_fmt(v)}" for k, v in self.reads.items())
+        who = "user" if self.by_user else "rule"
+        return (f"{self.name:<22} {_fmt(self.value):>12}  [{who}] {self.rule}"
+                + (f"  (read: {reads})" if reads else ""))
+
+
+@dataclass(frozen=True)
+class DenoisePlan:
+    """A denoise call, decided and not yet run (see the module docstring).
+
+    Attributes
+    ----------
+    n_vertices, n_faces : the input's size
+    options : the user's options after their checks (``None`` where the reading decides)
+    reading : the values read from the input (noise levels, direction, correlation, crease
+        support), each computed once
+    lam : fidelity weight λ of (6), per squared mean edge length
+    huber_delta : threshold of the robust Huber fidelity (0: quadratic)
+    willmore_weight : weight of edge-Willmore on the smooth edges
+    outside_weight : its factor outside the crease-supported region (1: none)
+    inner_iters : V-steps per ADMM iteration
+    stages : the ADMM stages of the main solve
+    start_from_probe : the main solve starts from the probe's result
+    presmooth_steps : Taubin λ|μ pairs applied to the input before the whole model runs again
+        on it (coarse-to-fine; 0: none); ``inner`` is then the plan of that low-passed input
+    polish : the finishing polish rule may run
+    decisions : every decision above, with what it read and the rule that made it
+    after_solve : decisions the executor takes on the solve's result (filled in
+        :attr:`meshrepair.DenoiseResult.plan`; empty before the run)
+    """
+
+    n_vertices: int
+    n_faces: int
+    options: Mapping[str, Any]
+    reading: Mapping[str, float]
+    # decisions
+    lam: float
+    huber_delta: float
+    willmore_weight: float
+    outside_weight: float
+    inner_iters: int
+    stages: tuple[Stage, ...]
+    start_from_probe: bool
+    presmooth_steps: int
+    polish: bool
+    # records
+    decisions: tuple[Decision, ...] = ()
+    inner: DenoisePlan | None = None
+    after_solve: tuple[Decision, ...] = ()
+    _state: Any = field(default=None, repr=False, compare=False)
+
+    def __str__(self) -> str:
+        return self.explain()
+
+    def explain(self, indent: str = "") -> str:
+        """The plan as text: the reading, each decision with its rule, the stages."""
+        out = [f"{indent}denoise plan: {self.n_vertices} vertices, {self.n_faces} faces"]
+        if self.reading:
+            out.append(f"{indent}  reading:")
+            out += [f"{indent}    {k:<24} {_fmt(v)}" for k, v in self.reading.items()]
+        out.append(f"{indent}  decisions:")
+        out += [f"{indent}    {d.line()}" for d in self.decisions]
+        out.append(f"{indent}  stages of the main solve:")
+        for s in self.stages:
+            out.append(f"{indent}    {s.name or 'stage'}: a={_fmt(s.a)} eps={_fmt(s.eps)} "
+                       f"mask={s.mask} max_iter={s.max_iter}")
+        if self.inner is not None:
+            out.append(f"{indent}  then, on the input low-passed by {self.presmooth_steps} "
+                       "Taubin pairs:")
+            out.append(self.inner.explain(indent + "    "))
+        if self.after_solve:
+            out.append(f"{indent}  after the solve:")
+            out += [f"{indent}    {d.line()}" for d in self.after_solve]
+        return "\n".join(out)
+
+    def editable(self) -> tuple[str, ...]:
+        """Names of the fields a user may change with :func:`dataclasses.replace`."""
+        names = [f.name for f in fields(self)]
+        return tuple(names[names.index("lam"):names.index("decisions")])
+
+
+def _fmt(v: Any) -> str:
+    if isinstance(v, bool) or v is None:
+        return str(v)
+    if isinstance(v, int):
+        return str(v)
+    if isinstance(v, float):
+        return "nan" if math.isnan(v) else f"{v:.4g}"
+    return str(v)

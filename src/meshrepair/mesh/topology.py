@@ -1,0 +1,190 @@
+"""Connectivity of a triangle mesh: unique edges, edge-face incidence, boundary loops, components.
+
+Everything here depends only on the face array ``F`` (int64, shape ``(nF, 3)``) and is computed
+once per connectivity; geometry lives in :mod:`meshrepair.mesh.geometry`.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+import scipy.sparse as sp
+
+
+@dataclass(frozen=True)
+class Topology:
+    """Edge structure of a triangle mesh.
+
+    Attributes
+    ----------
+    n_vertices : int
+    faces : (nF, 3) int64
+    edges : (nE, 2) int64
+        Unique undirected edges, ``edges[:, 0] < edges[:, 1]``.
+    edge_faces : (nE, 2) int64
+        The two faces incident to each edge; ``edge_faces[:, 0] < edge_faces[:, 1]`` for interior
+        edges (the ordering of (4): ``+l`` on the lower face index), ``-1`` in column 1 for
+        boundary edges. Non-manifold edges (more than two faces) are rejected by
+        :func:`edge_topology`.
+    face_edges : (nF, 3) int64
+        ``face_edges[m, k]`` is the index of the edge ``(F[m, k], F[m, (k+1) % 3])``.
+    edge_counts : (nE,) int64
+        Number of faces incident to each edge (1 boundary, 2 interior, >2 non-manifold).
+    """
+
+    n_vertices: int
+    faces: np.ndarray
+    edges: np.ndarray
+    edge_faces: np.ndarray
+    face_edges: np.ndarray
+    edge_counts: np.ndarray = field(repr=False)
+
+    @property
+    def n_faces(self) -> int:
+        return int(self.faces.shape[0])
+
+    @property
+    def n_edges(self) -> int:
+        return int(self.edges.shape[0])
+
+    @property
+    def interior(self) -> np.ndarray:
+        """(nE,) bool: edges with two incident faces."""
+        return self.edge_faces[:, 1] >= 0
+
+    @property
+    def boundary(self) -> np.ndarray:
+        """(nE,) bool: edges with exactly one incident face."""
+        return self.edge_faces[:, 1] < 0
+
+
+def edge_topology(F: np.ndarray, n_vertices: int | None = None) -> Topology:
+    """Build the unique edges and the edge-face incidence of a triangle mesh.
+
+    Parameters
+    ----------
+    F : (nF, 3) int array
+    n_vertices : int, optional
+        Number of vertices (default ``F.max() + 1``).
+
+    Returns
+    -------
+    Topology
+        Edges with more than two incident faces keep only their first two faces in
+        ``edge_faces``; ``edge_counts`` records the true count so callers can detect them.
+    """
+    F = np.asarray(F, dtype=np.int64)
+    nF = F.shape[0]
+    if n_vertices is None:
+        n_vertices = int(F.max()) + 1 if nF else 0
+    from meshrepair._kernels import edges_from_groups, group_halfedges
+
+    # half-edges grouped by edge, faces ascending (a stable sort by the edge's vertex pair)
+    return _topology_from_parts(F, n_vertices,
+                                *edges_from_groups(F, group_halfedges(F, n_vertices)))
+
+
+def _topology_from_parts(F: np.ndarray, n_vertices: int, edges: np.ndarray, edge_he: np.ndarray,
+                         inv: np.ndarray, counts: np.ndarray) -> Topology:
+    """A :class:`Topology` from the output of ``_kernels.edges_from_groups``."""
+    nF = F.shape[0]
+    edge_faces = np.where(edge_he >= 0, edge_he // 3, -1)
+    return Topology(
+        n_vertices=int(n_vertices),
+        faces=F,
+        edges=edges,
+        edge_faces=edge_faces,
+        face_edges=inv.reshape(nF, 3),
+        edge_counts=counts,
+    )
+
+
+def vertex_adjacency(edges: np.ndarray, n_vertices: int) -> sp.csr_matrix:
+    """Symmetric 0/1 vertex adjacency matrix, shape ``(nV, nV)``."""
+    i, j = edges[:, 0], edges[:, 1]
+    data = np.ones(2 * len(i))
+    A = sp.coo_matrix((data, (np.r_[i, j], np.r_[j, i])), shape=(n_vertices, n_vertices))
+    A = A.tocsr()
+    A.data[:] = 1.0
+    return A
+
+
+def vertex_face_incidence(F: np.ndarray, n_vertices: int) -> sp.csr_matrix:
+    """Sparse ``(nV, nF)`` matrix with a 1 where vertex i is a corner of face m."""
+    nF = F.shape[0]
+    rows = F.ravel()
+    cols = np.repeat(np.arange(nF), 3)
+    return sp.csr_matrix((np.ones(3 * nF), (rows, cols)), shape=(n_vertices, nF))
+
+
+def connected_components(F: np.ndarray, n_vertices: int) -> tuple[int, np.ndarray]:
+    """Face-connected components (via shared vertices).
+
+    Returns
+    -------
+    n : int
+    labels : (nV,) int64
+        Component label per vertex; unreferenced vertices get their own labels.
+    """
+    from meshrepair._kernels import union_find
+
+    labels = union_find(n_vertices, np.r_[F[:, 0], F[:, 1]], np.r_[F[:, 1], F[:, 2]])
+    n = int(labels.max()) + 1 if len(labels) else 0
+    return int(n), labels.astype(np.int64)
+
+
+def boundary_loops(F: np.ndarray, n_vertices: int | None = None) -> list[np.ndarray]:
+    """Boundary loops as ordered vertex index arrays.
+
+    Each loop follows the orientation of its faces (a boundary half-edge ``(u, v)`` of a face is
+    followed by ``(v, w)``), so filling a loop with faces ``(v, u, ·)`` keeps the mesh consistently
+    oriented. At a pinched vertex (several boundary loops through one vertex) the loops are split
+    by choosing, at each vertex, the outgoing boundary half-edge in face-order; every boundary
+    half-edge is used exactly once.
+
+    Parameters
+    ----------
+    F : (nF, 3) int array
+    n_vertices : int, optional
+
+    Returns
+    -------
+    list of (k,) int64 arrays, longest first.
+    """
+    F = np.asarray(F, dtype=np.int64)
+    he = np.stack([F, np.roll(F, -1, axis=1)], axis=2).reshape(-1, 2)
+    nv = int(F.max()) + 1 if n_vertices is None else n_vertices
+    key = np.sort(he, axis=1)
+    code = key[:, 0] * np.int64(nv) + key[:, 1]
+    _, inv, counts = np.unique(code, return_inverse=True, return_counts=True)
+    bhe = he[counts[inv] == 1]
+    if len(bhe) == 0:
+        return []
+    # successor map: from each boundary half-edge (u, v) go to a boundary half-edge starting at v
+    order = np.argsort(bhe[:, 0], kind="stable")
+    starts_sorted = bhe[order, 0]
+    used = np.zeros(len(bhe), dtype=bool)
+    loops: list[np.ndarray] = []
+    for s in range(len(bhe)):
+        if used[s]:
+            continue
+        loop = []
+        cur = s
+        while not used[cur]:
+            used[cur] = True
+            u, v = bhe[cur]
+            loop.append(u)
+            lo = np.searchsorted(starts_sorted, v, side="left")
+            hi = np.searchsorted(starts_sorted, v, side="right")
+            nxt = -1
+            for k in order[lo:hi]:
+                if not used[k]:
+                    nxt = k
+                    break
+            if nxt < 0:
+                break
+            cur = nxt
+        loops.append(np.asarray(loop, dtype=np.int64))
+    loops.sort(key=len, reverse=True)
+    return loops

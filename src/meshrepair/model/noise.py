@@ -1,0 +1,107 @@
+"""The paper's noise model (32) and a noise-level estimator.
+
+``V0 = V_GT + η d`` with ``η_i ~ N(0, σ²)`` i.i.d., ``σ = γ l̄`` (mean edge length) and ``d_i`` the
+unit vertex normal (``direction="normal"``) or a uniformly random unit vector (``"random"``).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from meshrepair._kernels import edge_lengths as _k_edge_lengths
+from meshrepair._kernels import umbrella
+from meshrepair.errors import MeshRepairError
+from meshrepair.mesh.geometry import mean_edge_length, vertex_normals
+from meshrepair.mesh.topology import Topology, edge_topology
+
+
+def add_noise(V: np.ndarray, F: np.ndarray, gamma: float, *, direction: str = "normal",
+              seed: int | None = 0) -> np.ndarray:
+    """Corrupt ``V`` with noise model (32).
+
+    Parameters
+    ----------
+    V : (nV, 3) float
+    F : (nF, 3) int
+    gamma : noise level γ >= 0, ``σ = γ · mean edge length``.
+    direction : ``"normal"`` or ``"random"``.
+    seed : seed of numpy's default generator (None for fresh entropy).
+
+    Returns
+    -------
+    (nV, 3) float64, a new array.
+    """
+    from meshrepair.mesh.array_contract import check_arrays
+    from meshrepair.options import check_int, check_number
+
+    gamma = check_number("gamma", gamma, low=0) + 0.0  # -0.0 -> 0.0 (numpy refuses scale -0)
+    if seed is not None and not isinstance(seed, np.random.SeedSequence):
+        seed = check_int("seed", seed, low=0)
+    if direction not in ("normal", "random"):
+        raise MeshRepairError(f"direction must be 'normal' or 'random', got {direction!r}")
+    V, F = check_arrays(V, F, name="add_noise mesh")
+    rng = np.random.default_rng(seed)
+    sigma = gamma * mean_edge_length(V, F)
+    if not np.isfinite(sigma):
+        raise MeshRepairError(f"the mean edge length of the mesh overflows ({sigma}); rescale "
+                              "the coordinates first")
+    eta = rng.normal(0.0, sigma, size=len(V))
+    if direction == "normal":
+        d = vertex_normals(V, F)
+    else:
+        d = rng.normal(size=(len(V), 3))
+        d /= np.linalg.norm(d, axis=1, keepdims=True)
+    return V + eta[:, None] * d
+
+
+def estimate_noise(V: np.ndarray, F: np.ndarray, topo: Topology | None = None) -> float:
+    """Estimate the noise level γ (in mean edge lengths) from the mesh alone.
+
+    Robust estimate: the median absolute deviation of the normal component of the umbrella
+    Laplacian ``δ_i = mean(v_j) - v_i``, scaled to a standard deviation (× 1.4826) and divided by
+    ``sqrt(1 + 1/deg_i)`` (the Laplacian of i.i.d. noise mixes the vertex's own noise with the mean
+    of its neighbours'). Curvature of a clean mesh adds a small bias (clean shared meshes read
+    0.00-0.05). Random-direction noise reads about 1/sqrt(3)-1/2 of γ, since only the normal part
+    is seen.
+
+    Returns
+    -------
+    float, estimated γ.
+    """
+    return noise_statistics(V, F, topo)[0]
+
+
+def noise_statistics(V: np.ndarray, F: np.ndarray, topo: Topology | None = None
+                     ) -> tuple[float, float]:
+    """The robust (MAD) and the plain (RMS) noise level of :func:`estimate_noise`.
+
+    The two agree for Gaussian noise (measured within 5 % on the shared meshes at γ = 0.2);
+    impulsive noise, where a minority of vertices moves far, reads 1.5× higher in RMS
+    (twelve__impulsive0.5: 0.206 vs 0.306).
+
+    Returns
+    -------
+    (gamma_mad, gamma_rms) : floats in mean edge lengths.
+    """
+    V = np.asarray(V, dtype=np.float64)
+    F = np.asarray(F, dtype=np.int64)
+    if topo is None:
+        topo = edge_topology(F, len(V))
+    e = topo.edges
+    nV = len(V)
+    S, deg = umbrella(V, e)
+    ok = deg > 0
+    # skip boundary vertices: their umbrella is one-sided
+    bnd = np.zeros(nV, bool)
+    bnd[topo.edges[topo.boundary].ravel()] = True
+    ok &= ~bnd
+    if not ok.any():
+        return 0.0, 0.0
+    lap = S[ok] / deg[ok, None] - V[ok]
+    n = vertex_normals(V, F)[ok]
+    h = np.einsum("ij,ij->i", lap, n) / np.sqrt(1.0 + 1.0 / deg[ok])
+    dev = h - np.median(h)
+    L = _k_edge_lengths(V, topo.edges).mean()
+    mad = 1.4826 * np.median(np.abs(dev))
+    rms = np.sqrt(np.mean(dev**2))
+    return float(mad / L), float(rms / L)

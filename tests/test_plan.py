@@ -1,0 +1,125 @@
+"""The plan of a denoise call: read once, printable, editable, and run exactly as planned."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pytest
+
+import meshrepair as mr
+from meshrepair.errors import MeshRepairError
+
+from .bundled import bundled_mesh, data_path
+
+
+@pytest.fixture(scope="module")
+def noisy_fandisk():
+    return bundled_mesh("fandisk_noisy.ply")
+
+
+@pytest.fixture(scope="module")
+def heavy_spot():
+    """An organic mesh under heavy random noise: the plan low-passes the input first and plans
+    the low-passed input (a nested plan)."""
+    V, F = bundled_mesh("spot.ply")
+    return mr.add_noise(V, F, 0.5, direction="random", seed=1), F
+
+
+def test_plan_is_deterministic_and_pure(noisy_fandisk):
+    V, F = noisy_fandisk
+    V0, F0 = V.copy(), F.copy()
+    a, b = mr.plan_denoise(V, F), mr.plan_denoise(V, F)
+    assert a == b and str(a) == str(b)
+    assert np.array_equal(V, V0) and np.array_equal(F, F0)  # inputs untouched
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        a.lam = 1.0  # type: ignore[misc]
+
+
+def test_plan_records_every_decision_with_its_reads(noisy_fandisk):
+    p = mr.plan_denoise(*noisy_fandisk)
+    names = [d.name for d in p.decisions]
+    for n in ("lam", "huber_delta", "robust_iters", "willmore_weight", "outside_weight",
+              "presmooth_steps", "start_from_probe"):
+        assert n in names
+    lam = next(d for d in p.decisions if d.name == "lam")
+    assert lam.value == p.lam and lam.reads["gamma"] == p.reading["gamma"] and not lam.by_user
+    text = p.explain()
+    assert "decisions:" in text and "stages of the main solve" in text
+    assert set(p.editable()) == {"lam", "huber_delta", "willmore_weight", "outside_weight",
+                                 "inner_iters", "stages", "start_from_probe",
+                                 "presmooth_steps", "polish"}
+
+
+@pytest.mark.parametrize("case", ["noisy_fandisk", "heavy_spot"])
+def test_running_the_plan_equals_the_one_shot_call(case, request):
+    V, F = request.getfixturevalue(case)
+    r = mr.denoise(V, F)
+    p = mr.plan_denoise(V, F)
+    q = mr.denoise(V, F, plan=p)
+    assert np.array_equal(r.V, q.V)
+    assert r.params == q.params or _same_params(r.params, q.params)
+    assert q.plan.after_solve  # the finish's decisions are recorded in the plan that ran
+    if case == "heavy_spot":
+        assert p.presmooth_steps > 0 and p.inner is not None
+        assert "low-passed by" in p.explain()
+
+
+def _same_params(a, b):
+    if a.keys() != b.keys():
+        return False
+    return all((x != x and y != y) or x == y for x, y in ((a[k], b[k]) for k in a))
+
+
+def test_an_edited_plan_runs_as_edited(noisy_fandisk):
+    V, F = noisy_fandisk
+    p = mr.plan_denoise(V, F)
+    q = dataclasses.replace(p, lam=4 * p.lam)
+    r = mr.denoise(V, F, plan=q)
+    assert r.params["lam"] == pytest.approx(4 * p.lam) and r.plan.lam == q.lam
+    assert not np.array_equal(r.V, mr.denoise(V, F, plan=p).V)
+
+
+def test_user_options_appear_as_set_by_the_user(heavy_spot):
+    V, F = heavy_spot
+    p = mr.plan_denoise(V, F, lam=0.3)
+    lam = next(d for d in p.decisions if d.name == "lam")
+    assert lam.by_user and lam.value == 0.3
+    pre = next(d for d in p.decisions if d.name == "presmooth_steps")
+    # what the user's option switched off is said, not silent
+    assert pre.value == 0 and pre.by_user and "set by the user" in pre.rule
+
+
+def test_plan_misuse_is_refused(noisy_fandisk, heavy_spot):
+    V, F = noisy_fandisk
+    p = mr.plan_denoise(V, F)
+    with pytest.raises(MeshRepairError, match="another mesh"):
+        mr.denoise(*heavy_spot, plan=p)
+    with pytest.raises(MeshRepairError, match="leave the other options"):
+        mr.denoise(V, F, plan=p, lam=0.5)
+    with pytest.raises(MeshRepairError, match="DenoisePlan"):
+        mr.denoise(V, F, plan={"lam": 1})
+    ps = mr.plan_denoise(*heavy_spot)
+    with pytest.raises(MeshRepairError, match="presmooth_steps"):
+        mr.denoise(*heavy_spot, plan=dataclasses.replace(ps, presmooth_steps=ps.presmooth_steps
+                                                         + 3))
+
+
+def test_presmooth_can_be_switched_off_in_the_plan(heavy_spot):
+    V, F = heavy_spot
+    p = mr.plan_denoise(V, F)
+    r = mr.denoise(V, F, plan=dataclasses.replace(p, presmooth_steps=0))
+    assert r.params["presmooth_steps"] == 0 and np.isfinite(r.V).all()
+
+
+def test_cli_explain_prints_the_plan_and_writes_nothing(tmp_path, capsys, monkeypatch):
+    from meshrepair.cli import main
+
+    monkeypatch.chdir(tmp_path)
+    assert main(["denoise", str(data_path("fandisk_noisy.ply")), "--explain"]) == 0
+    out = capsys.readouterr().out
+    assert "denoise plan:" in out and "lam" in out and "nothing written" in out
+    assert list(tmp_path.iterdir()) == []
+    assert main(["denoise", str(data_path("fandisk_noisy.ply")), str(tmp_path / "x.ply"),
+                 "--explain"]) != 0
+    assert list(tmp_path.iterdir()) == []
