@@ -122,3 +122,16 @@ def test_liepa_refinement_bounded_on_twelve_cut_at_16():
     res = fill_holes(Vc, Fc)
     assert time.perf_counter() - t < 60
     assert res.n_skipped == 0 and len(res.new_faces) < 20_000
+
+
+@pytest.mark.shared
+def test_hole_next_to_a_flat_base_not_taken_for_an_island():
+    """nicolo (open base) cut at 4 l̄, seed 0: a cut next to the base lies inside the base's
+    planar view and was paired with it as an island; their annulus intersects the surface, so
+    the two are enclosed separately and both patches are clear of the surface."""
+    V, F = shared_mesh("nicolo.ply")
+    Vc, Fc, _, _ = cut_holes(V, F, 4, seed=0)
+    res = fill_holes(Vc, Fc)
+    assert res.n_skipped == 0
+    assert not any(h.reason.startswith(("annulus", "island")) for h in res.holes)
+    assert all(h.n_intersections == 0 for h in res.holes), res.summary()

@@ -77,6 +77,7 @@ def _place_patches(V: np.ndarray, F: np.ndarray, holes, skip: dict[int, str], *,
     seam_prev: dict[int, float] = {}  # hole -> seam angle of its planar patch (seam trial)
     locked: set[int] = set()
     revert: list[int] = []
+    unpair: set[int] = set()  # loops whose annulus intersected: enclosed without their island
     while True:
         ta = time.perf_counter()
         method = {h.index: _enclose_methods(h)[stage.get(h.index, 0)] for h in holes}
@@ -85,7 +86,7 @@ def _place_patches(V: np.ndarray, F: np.ndarray, holes, skip: dict[int, str], *,
             sharp_v = np.flatnonzero(_sharp_vertices(V, F, th, nV))
         V1, F1, reports = enclose_holes(
             V, F, holes, skip, edge_length=edge_length, check=check, intersections=False,
-            method=method, creases=routes, known_holes=known_holes,
+            method=method, creases=routes, known_holes=known_holes, unpair=set(unpair),
             progress=None if progress is None or not first else progress)
         first = False
         tb = time.perf_counter()
@@ -126,6 +127,7 @@ def _place_patches(V: np.ndarray, F: np.ndarray, holes, skip: dict[int, str], *,
             V1 = _finite_rows(V1, Vm, np.arange(nV, len(V1)), "the thin-plate fairing")
         drop: dict[int, str] = {}
         retry: list[int] = []
+        again = False
         if check:
             dropped = np.zeros(len(F1), bool)  # faces of patches already refused
             blocks = _blocks(reports, nV, nF)
@@ -192,6 +194,15 @@ def _place_patches(V: np.ndarray, F: np.ndarray, holes, skip: dict[int, str], *,
                     continue
                 tried = ", ".join(_METHOD_NAMES[m] for m in _enclose_methods(by_index[i])
                                   ) if not rep.reason.startswith("annulus") else "annulus"
+                if rep.reason.startswith("annulus") and i not in unpair:
+                    # the loop and the island it was paired with are enclosed separately: an
+                    # island found by the planar view can be a hole next to it (a cut near a
+                    # statue's flat base)
+                    log.info("hole %d: its annulus intersects the mesh (%d face pairs); "
+                             "enclosing it and its island separately", i, n_x)
+                    unpair.add(i)
+                    again = True
+                    continue
                 if i in known_holes:
                     dropped[bf] = False
                     note = (f"the patch intersects the surface ({n_x} face pairs; tried: "
@@ -208,7 +219,7 @@ def _place_patches(V: np.ndarray, F: np.ndarray, holes, skip: dict[int, str], *,
                            f"CLI --holes {i})")
         t_enclose += tb - ta
         t_initial += time.perf_counter() - tb
-        if not retry and not revert:
+        if not retry and not revert and not again:
             break
         for i in retry:
             stage[i] = stage.get(i, 0) + 1

@@ -88,7 +88,8 @@ def enclose_holes(V: np.ndarray, F: np.ndarray, holes: Sequence[Hole],
                   method: str | Mapping[int, str] = "auto",
                   creases: Mapping[int, np.ndarray] | None = None,
                   progress: Callable[[int, int], None] | None = None,
-                  known_holes: set[int] | frozenset[int] = frozenset()
+                  known_holes: set[int] | frozenset[int] = frozenset(),
+                  unpair: set[int] | frozenset[int] = frozenset()
                   ) -> tuple[np.ndarray, np.ndarray, list[HoleReport]]:
     """Enclose the selected holes of a mesh with initial (membrane) patches.
 
@@ -118,6 +119,9 @@ def enclose_holes(V: np.ndarray, F: np.ndarray, holes: Sequence[Hole],
     known_holes : set of int
         Loops known to be holes (enclosed by the rest of the surface, or asked for): a patch
         lying on the surface is kept with a note in the report instead of refused.
+    unpair : set of int
+        Loops never paired with an island (each is enclosed on its own): the caller's retry
+        when their annulus intersects the surface.
 
     Returns
     -------
@@ -142,7 +146,8 @@ def enclose_holes(V: np.ndarray, F: np.ndarray, holes: Sequence[Hole],
     for h in holes:  # holes are sorted longest first
         longest_of_component.setdefault(h.component, h.index)
 
-    partner = pair_islands(V, F, holes)
+    partner = {a: b for a, b in pair_islands(V, F, holes).items()
+               if a not in unpair and b not in unpair}
     for h in holes:
         if h.index in partner:
             o = partner[h.index]
