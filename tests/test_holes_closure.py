@@ -4,7 +4,6 @@ of the surface, :mod:`meshrepair.holes.closure`) next to the size rule of
 
 from __future__ import annotations
 
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -20,8 +19,24 @@ from meshrepair.synthetic import cut_holes
 
 from .conftest import grid, shared_mesh
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
 DATA = Path(__file__).resolve().parent / "data"
+
+
+def _crease_centre(V, F) -> int:
+    """The crease vertex (2 edges sharper than 30°) farthest from every corner (3 or more), as
+    ``benchmarks/_holes_peers.pick_centres`` chooses it (not imported: the benchmark helpers
+    set thread variables on import)."""
+    from scipy.spatial import cKDTree
+
+    from meshrepair.mesh.geometry import dihedral_angles, face_normals
+    from meshrepair.mesh.topology import edge_topology
+
+    topo = edge_topology(F, len(V))
+    se = topo.edges[dihedral_angles(face_normals(V, F), topo) > 30.0]
+    cnt = np.bincount(se.ravel(), minlength=len(V))
+    corners, crease = np.flatnonzero(cnt >= 3), np.flatnonzero(cnt == 2)
+    d, _ = cKDTree(V[corners]).query(V[crease])
+    return int(crease[np.argmax(d)])
 
 
 def _read(name):
@@ -66,10 +81,8 @@ def test_relief_border_left_open_by_default_and_named_in_the_summary():
 def test_closed_cad_part_cut_over_a_crease_is_filled_never_skipped(radius):
     """fandisk (closed) with three discs cut, the first centred on a crease, three seeds: every
     hole is filled; each loop's enclosure is above the threshold."""
-    import _holes_peers as hp
-
     V, F = _read("fandisk.ply")
-    crease = dict(hp.pick_centres(V, F))["crease"]
+    crease = _crease_centre(V, F)
     for seed in (0, 1, 2):
         Vc, Fc, _, _ = cut_holes(V, F, radius, seed=seed, centres=[crease])
         _, enc, _ = classify_loops(Vc, Fc, find_holes(Vc, Fc))
@@ -84,9 +97,7 @@ def test_closed_cad_part_hole_kept_when_every_patch_intersects():
     surface with every enclosing method; the loop is a hole of a closed body, so the patch is
     kept and the report says to check it (before: skipped)."""
     V, F = _read("trim_star.ply")
-    import _holes_peers as hp
-
-    crease = dict(hp.pick_centres(V, F))["crease"]
+    crease = _crease_centre(V, F)
     Vc, Fc, _, _ = cut_holes(V, F, 16, seed=1, centres=[crease])
     res = fill_holes(Vc, Fc)
     assert res.n_skipped == 0
@@ -113,10 +124,8 @@ def test_liepa_refinement_bounded_on_twelve_cut_at_16():
     points (minutes); bounded, the hole falls back to the mean-value layout."""
     import time
 
-    import _holes_peers as hp
-
     V, F = shared_mesh("twelve.ply")
-    crease = dict(hp.pick_centres(V, F))["crease"]
+    crease = _crease_centre(V, F)
     Vc, Fc, _, _ = cut_holes(V, F, 16, seed=0, centres=[crease])
     t = time.perf_counter()
     res = fill_holes(Vc, Fc)
