@@ -37,6 +37,7 @@ def _fill_core(V: np.ndarray, F: np.ndarray, holes, skip: dict[int, str], *, den
                progress: Callable[[int, int], None] | None = None,
                creases: bool = True, curvature: bool = True,
                triharmonic: bool = True, known_holes: set[int] | frozenset[int] = frozenset(),
+               kept_holes: set[int] | frozenset[int] = frozenset(),
                notes: dict[int, str] | None = None) -> FillResult:
     from meshrepair.mesh.geometry import face_normals, sharp_edge_mask
 
@@ -45,7 +46,7 @@ def _fill_core(V: np.ndarray, F: np.ndarray, holes, skip: dict[int, str], *, den
     V1, F1, reports, t_enclose, t_initial = _place_patches(
         V, F, holes, skip, initial=initial, edge_length=edge_length, th=th, check=check,
         progress=progress, creases=creases, curvature=curvature, triharmonic=triharmonic,
-        known_holes=known_holes)
+        known_holes=known_holes, kept_holes=kept_holes)
     for rep in reports:
         if rep.status == "filled" and notes and rep.index in notes:
             rep.add_note(notes[rep.index])

@@ -61,14 +61,16 @@ are."""
 def _place_patches(V: np.ndarray, F: np.ndarray, holes, skip: dict[int, str], *, initial: str,
                    edge_length: float | None, th: float, check: bool,
                    progress: Callable[[int, int], None] | None, creases: bool, curvature: bool,
-                   triharmonic: bool, known_holes: set[int] | frozenset[int] = frozenset()
+                   triharmonic: bool, known_holes: set[int] | frozenset[int] = frozenset(),
+                   kept_holes: set[int] | frozenset[int] = frozenset()
                    ) -> tuple[np.ndarray, np.ndarray, list[HoleReport], float, float]:
     """Enclose the selected holes and place their patches; returns ``(V1, F1, reports,
     t_enclose, t_initial)`` with the refused patches already removed (their reports say why).
 
     ``known_holes``: loops known to be holes (the rest of the surface encloses them, or the
-    caller selected them): never refused; a patch that still intersects the surface after every
-    enclosing method is kept, with a note in its report."""
+    caller selected them): never refused; a patch lying on the surface, or still intersecting
+    it after every enclosing method, is kept, with a note in its report. ``kept_holes``: more
+    loops whose intersecting patch is kept with a note (the uncertain ones)."""
     nV, nF = len(V), len(F)
     by_index = {h.index: h for h in holes}
     stage: dict[int, int] = {}  # hole index -> position in its list of enclosing methods
@@ -203,11 +205,11 @@ def _place_patches(V: np.ndarray, F: np.ndarray, holes, skip: dict[int, str], *,
                     unpair.add(i)
                     again = True
                     continue
-                if i in known_holes:
+                if i in known_holes or i in kept_holes:
                     dropped[bf] = False
                     note = (f"the patch intersects the surface ({n_x} face pairs; tried: "
-                            f"{tried}); kept because the loop is a hole of a closed surface or "
-                            "was selected: check it")
+                            f"{tried}); kept, not refused (a hole of a closed surface, a selected "
+                            "or an uncertain loop): check it")
                     if note not in rep.note:
                         rep.add_note(note)
                         log.warning("hole %d: %s", i, note)

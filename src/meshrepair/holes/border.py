@@ -53,6 +53,12 @@ ENCLOSED = 0.84
 """A loop whose enclosure (:func:`meshrepair.holes.closure.loop_enclosure`) is at least this is
 a hole of a body closed apart from its holes: never a border, never refused."""
 
+UNCERTAIN = 0.6
+"""A loop the size rule does not call a border, with an enclosure between this and
+:data:`ENCLOSED`, is uncertain: filled, and a patch intersecting the surface after every
+enclosing method is kept with a note (below it, such a patch is refused). The smallest
+enclosure of a hole of a closed body measured on the shared meshes is 0.82."""
+
 
 def component_areas(V: np.ndarray, F: np.ndarray, comp: np.ndarray) -> np.ndarray:
     """Surface area of every connected component (``comp`` is the vertex label array)."""
