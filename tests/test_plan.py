@@ -99,6 +99,8 @@ def test_plan_misuse_is_refused(noisy_fandisk, heavy_spot):
         mr.denoise(V, F, plan=p, lam=0.5)
     with pytest.raises(MeshRepairError, match="DenoisePlan"):
         mr.denoise(V, F, plan={"lam": 1})
+    with pytest.raises(MeshRepairError, match="record"):
+        mr.denoise(V, F, plan=mr.denoise(V, F).plan)
     ps = mr.plan_denoise(*heavy_spot)
     with pytest.raises(MeshRepairError, match="presmooth_steps"):
         mr.denoise(*heavy_spot, plan=dataclasses.replace(ps, presmooth_steps=ps.presmooth_steps

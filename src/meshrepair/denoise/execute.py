@@ -34,7 +34,10 @@ log = logging.getLogger("meshrepair.denoise.run")
 def _execute(plan: DenoisePlan, V, F, callback=None) -> DenoiseResult:
     """Run ``plan`` on ``(V, F)`` (the mesh it was made from; module docstring)."""
     st: _State = plan._state
-    if st is None or plan.n_vertices != len(V) or plan.n_faces != len(F):
+    if st is None:
+        raise MeshRepairError("this plan carries no reading of a mesh (DenoiseResult.plan is a "
+                              "record of what ran): make a plan with mr.plan_denoise(V, F)")
+    if plan.n_vertices != len(V) or plan.n_faces != len(F):
         raise MeshRepairError("this plan was made for another mesh: make it with "
                               "mr.plan_denoise(V, F) on the mesh you denoise")
     o = plan.options
@@ -64,7 +67,8 @@ def _execute(plan: DenoisePlan, V, F, callback=None) -> DenoiseResult:
 
         r.V = _cl.apply(r.V, F, topo, gamma, info, impulsive, V, st.r1_V)
         r.params.update({k_: info[k_] for k_ in _cl.RECORDED})
-        r.plan = replace(plan, inner=r.plan, after_solve=_after(info, st.info, _cl.RECORDED))
+        r.plan = replace(plan, inner=r.plan, after_solve=_after(info, st.info, _cl.RECORDED),
+                         _state=None)
         return r
     info["presmooth_steps"] = 0
     reorder, inv, Fw, topo_w = st.reorder, st.inv, st.Fw, st.topo_w
@@ -170,7 +174,8 @@ def _execute(plan: DenoisePlan, V, F, callback=None) -> DenoiseResult:
         V=V_out, F=F, M_E=M_E, edges=topo.edges.copy(), M_V=res.M_V, history=res.history,
         iterations=res.iterations, stop_reason=res.stop_reason, noise_estimate=gamma,
         params=params, n_unfolded=st.n_unf,
-        plan=replace(plan, after_solve=_after(info, st.info, ())),
+        # the record keeps no arrays of the reading: it would hold the probe's result alive
+        plan=replace(plan, after_solve=_after(info, st.info, ()), _state=None),
     )
 
 

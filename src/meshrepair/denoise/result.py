@@ -27,8 +27,9 @@ class DenoiseResult:
     n_unfolded : int, faces folded over in the input that were unfolded before the solve
         (``params["result_folds_unfolded"]``: faces folded in the solve's result, unfolded
         after it)
-    plan : DenoisePlan, the plan that ran (:func:`meshrepair.plan_denoise`), with the
-        decisions taken after the solve in ``plan.after_solve``; ``print(r.plan)`` explains it
+    plan : DenoisePlan, a record of the plan that ran (:func:`meshrepair.plan_denoise`), with
+        the decisions taken after the solve in ``plan.after_solve``; ``print(r.plan)`` explains
+        it (it keeps no arrays of the reading, so it is printed, not run again)
     """
 
     V: np.ndarray
