@@ -35,6 +35,12 @@ and across corners and creases of CAD meshes (radii 4, 8) and refills them with 
 patch distance, normal deviation, crease angle restored vs truth, time, peak memory);
 ``--crease-picture PNG`` draws docs/img/holes_crease.png.
 
+Issue 28 (``benchmarks/_holes_protocol.py``): ``protocol`` cuts 3 discs of r = 4, 8, 16, 24 l̄
+(three seeds) from every shared real mesh with :func:`meshrepair.synthetic.cut_holes` and fills
+them with meshrepair, CGAL, MeshLib ``fillHole`` / ``fillHoleNicely``, PyMeshLab and pymeshfix
+(``--meshes``, ``--radii``, ``--seeds``, ``--methods``, ``--jsonl`` to keep the records,
+``--from-jsonl`` to print their table).
+
 Usage: ``python benchmarks/holes.py [--enclose auto,liepa] [--cases cut,bunny,denoise,real,peers]``
 (about a minute). ``--enclose`` sets the order in which
 :data:`meshrepair.fill.options.ENCLOSE_ORDER`
@@ -284,6 +290,17 @@ def main() -> None:
                     help="smooth meshes of the peers case (default: spot,nefertiti)")
     ap.add_argument("--cad", default="fandisk,twelve,trim_star,rocker_arm",
                     help="CAD meshes of the peers case (holes across a corner and a crease)")
+    ap.add_argument("--meshes", default=None,
+                    help="protocol case: comma-separated shared meshes (default: every shared "
+                         "real mesh, CAD then organic)")
+    ap.add_argument("--radii", default="4,8,16,24", help="protocol case: radii in l̄")
+    ap.add_argument("--seeds", default="0,1,2", help="protocol case: seeds of the cut")
+    ap.add_argument("--methods", default=None,
+                    help="protocol case: comma-separated methods (default: all)")
+    ap.add_argument("--jsonl", default=None,
+                    help="protocol case: append one JSON record per run to this file")
+    ap.add_argument("--from-jsonl", default=None,
+                    help="protocol case: only print the table of the records in this file")
     ap.add_argument("--picture", metavar="PNG", default=None,
                     help="only write the bunny before/after picture (docs/img/holes_bunny.png)")
     ap.add_argument("--crease-picture", metavar="PNG", default=None,
@@ -300,9 +317,17 @@ def main() -> None:
         if not order or set(order) - {"auto", "liepa"}:
             ap.error("--enclose takes methods among: auto, liepa")
         meshrepair.fill.options.ENCLOSE_ORDER = order
+    if args.from_jsonl:
+        import json
+
+        import _holes_protocol
+
+        recs = [json.loads(x) for x in open(args.from_jsonl) if x.strip()]
+        print("\n".join(_holes_protocol.table(recs)))
+        return
     cases = {c.strip() for c in args.cases.split(",")}
-    if cases - {"cut", "bunny", "denoise", "peers", "real"}:
-        ap.error("--cases takes: cut, bunny, denoise, peers, real")
+    if cases - {"cut", "bunny", "denoise", "peers", "real", "protocol"}:
+        ap.error("--cases takes: cut, bunny, denoise, peers, real, protocol")
     _common.limit_threads(1)
     info = _common.machine_info()
     print(f"machine: {info.get('cpu', '?')}, {info.get('cores')} cores; python {info['python']}, "
@@ -342,6 +367,17 @@ def main() -> None:
             _holes_peers.run_peers(cut_disc, lines, notes, sm,
                                    [x.strip() for x in args.cad.split(",") if x.strip()])
             lines.extend(notes)
+    if "protocol" in cases:
+        import _holes_protocol
+
+        notes = []
+        meshes = ([x.strip() for x in args.meshes.split(",") if x.strip()] if args.meshes
+                  else list(_holes_protocol.CAD + _holes_protocol.ORGANIC))
+        _holes_protocol.run_protocol(
+            lines, notes, meshes, [float(x) for x in args.radii.split(",")],
+            [int(x) for x in args.seeds.split(",")], out_jsonl=args.jsonl,
+            methods=args.methods.split(",") if args.methods else None)
+        lines.extend(notes)
     print("\n--- table ---")
     print("\n".join(lines))
 

@@ -148,7 +148,7 @@ def test_absurd_edge_length_is_refused_up_front_with_the_count():
     with pytest.raises(MeshRepairError, match=r"about [\d,]+ new triangles.*limit"):
         fill_holes(V, F, keep_border=True, edge_length=1e-4)
     with pytest.raises(MeshRepairError, match=r"about [\d,]+ new triangles"):
-        inpaint(V, F, ("sphere", (0.25, 0.25, 0.0), 0.1), edge_length=1e-4)
+        inpaint(V, F, ("sphere", (0.2, 0.2, 0.0), 0.08), edge_length=1e-4)
 
 
 # ------------------------------------------------------------------------------------------------

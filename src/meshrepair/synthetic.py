@@ -175,3 +175,55 @@ def impulsive_noise(V: np.ndarray, F: np.ndarray, frac: float, amp: float,
     idx = rng.random(len(V)) < frac
     Vn[idx] += (amp * length * rng.normal(size=(idx.sum(), 1))) * N[idx]
     return Vn
+
+
+def cut_holes(V: np.ndarray, F: np.ndarray, radius: float, *, n_holes: int = 3, seed: int = 0,
+              centres=None) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The cut protocol of the hole benchmarks: ``n_holes`` geodesic discs cut from a mesh.
+
+    Centres are vertices drawn at random (``seed``) among those farther than ``2.5 radius``
+    (edge-graph distance) from every centre drawn before, so the holes stay apart; every face
+    with a corner within ``radius`` mean edge lengths of a centre is removed and the unused
+    vertices are dropped.
+
+    Parameters
+    ----------
+    radius : float
+        Disc radius in mean edge lengths (``l̄``).
+    centres : sequence of int, optional
+        Vertex indices of the first centres (e.g. on a crease); the rest are drawn.
+
+    Returns
+    -------
+    Vc, Fc : the cut mesh (vertices in their original order)
+    removed : (r,) int64
+        Indices into ``F`` of the removed faces (the ground truth of the holes).
+    centres : (n_holes,) int64
+        The centre vertices (input numbering).
+    """
+    if not (np.isfinite(radius) and radius > 0) or int(n_holes) < 1:
+        raise MeshRepairError(f"cut_holes needs radius > 0 and n_holes >= 1, got {radius!r}, "
+                              f"{n_holes!r}")
+    le = mean_edge_length(V, F)
+    rng = np.random.default_rng(seed)
+    chosen = [int(c) for c in (centres or ())][:n_holes]
+    far = np.ones(len(V), bool)
+    inside = np.zeros(len(V), bool)
+    used = np.zeros(len(V), bool)
+    used[F.ravel()] = True
+    for i in range(n_holes):
+        if i >= len(chosen):
+            cand = np.flatnonzero(far & used)
+            if len(cand) == 0:
+                break
+            chosen.append(int(rng.choice(cand)))
+        d = edge_graph_distances(V, F, chosen[i], limit=2.5 * radius * le)
+        inside |= d < radius * le
+        far &= ~(d < 2.5 * radius * le)
+    removed = inside[F].any(axis=1)
+    Fk = F[~removed]
+    keep = np.zeros(len(V), bool)
+    keep[Fk.ravel()] = True
+    vmap = np.cumsum(keep) - 1
+    return (V[keep], vmap[Fk].astype(np.int64), np.flatnonzero(removed).astype(np.int64),
+            np.asarray(chosen, np.int64))

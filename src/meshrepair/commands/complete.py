@@ -135,7 +135,8 @@ def add_complete_options(p, *, required: bool = True) -> None:
                    help="faces to replace: a text file of face indices, or a .ply/.npy "
                    "per-vertex mask (the faces with all three vertices selected)")
     g.add_argument("--hole", type=int, metavar="K",
-                   help="complete the existing boundary loop K (0 = longest) instead")
+                   help="complete the existing hole K instead (numbered as 'meshrepair fill "
+                   "--list' shows them: 0 = longest)")
     p.add_argument("--template-region", metavar="FILE", default=None,
                    help="use only these faces of TEMPLATE (same formats as --region)")
     p.add_argument("--mirror", action="store_true",

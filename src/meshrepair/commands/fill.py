@@ -6,6 +6,7 @@ Examples
 ``meshrepair fill scan.ply scan_filled.ply --keep-border --max-hole-size 50 --denoise``
 ``meshrepair fill scan.ply --list``
 ``meshrepair inpaint head.ply head_fixed.ply --sphere 0.1,0.2,0.3,0.05``
+``meshrepair inpaint scan.ply scan_fixed.ply --sphere 0.1,0.2,0.3,0.05 --keep-border``
 
 The output keeps what the input holds (colours, texture coordinates, materials, per-face
 properties, binary/ASCII and precision; interpolated on the new vertices:
@@ -228,7 +229,8 @@ def inpaint_options(args: argparse.Namespace) -> dict:
         region = ["box", [x0, y0, z0], [x1, y1, z1]]
     else:
         region = None
-    return dict(region=region, attribute=args.attribute, **_solve_options(args))
+    return dict(region=region, attribute=args.attribute,
+                keep_border=bool(getattr(args, "keep_border", False)), **_solve_options(args))
 
 
 def _common(p: argparse.ArgumentParser) -> None:
@@ -268,5 +270,9 @@ def register(subparsers) -> None:
     q.add_argument("input", help="mesh file")
     q.add_argument("output", help="mesh file to write (PLY gets a 'filled' vertex property)")
     add_inpaint_options(q)
+    q.add_argument("--keep-border", action="store_true",
+                   help="where the region reaches an open border of the mesh, keep the faces "
+                   "along the border and fill the rest (default: refuse to fill a region that "
+                   "reaches an open border, which would close the border too)")
     _common(q)
     q.set_defaults(func=run_inpaint)

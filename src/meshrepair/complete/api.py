@@ -87,7 +87,6 @@ from meshrepair.complete.stitch import (  # noqa: F401  (re-exported)
 )
 from meshrepair.errors import MeshRepairError
 from meshrepair.mesh.geometry import mean_edge_length
-from meshrepair.mesh.topology import boundary_loops
 
 log = logging.getLogger(__name__)
 
@@ -145,8 +144,10 @@ def complete(
         plane, detected on the intact surface (refused when the mesh is not symmetric enough).
     region_vertices : vertex selection (indices, boolean/0-1 mask or mask file); the region is
         the faces with all three vertices selected.
-    hole : index of an existing boundary loop of the mesh (``topology.boundary_loops`` order,
-        longest first) to complete; then nothing is removed.
+    hole : index of an existing hole of the mesh, numbered as everywhere else
+        (:func:`meshrepair.holes.find_holes`: simple loops, longest first, as ``meshrepair fill
+        --list`` shows them) to complete; then nothing is removed. A pinched hole (sharing a
+        vertex with another) is refused.
     transform : (4, 4) array or a path to a text file with 16 numbers: applied to the template,
         automatic alignment is skipped (the cyclic correspondence is still searched).
     strip_rings : width of ``strip(b0)`` in edge rings on each side of the seam (>= 1; the paper
@@ -260,20 +261,27 @@ def complete(
     given = [x is not None for x in (region, region_vertices, hole)]
     if sum(given) != 1:
         raise MeshRepairError("give exactly one of region (face indices), region_vertices (a "
-                              "vertex selection) or hole (a boundary loop index)")
+                              "vertex selection) or hole (a hole index, as 'meshrepair fill "
+                              "--list' numbers it)")
     if hole is not None:
-        loops = boundary_loops(F, nV)
-        if not loops:
+        from meshrepair.holes import _find_holes
+
+        holes = _find_holes(V, F)
+        if not holes:
             raise MeshRepairError("the mesh is closed (no hole); select the region to replace "
                                   "with region= or region_vertices=")
         if (isinstance(hole, bool) or not isinstance(hole, (int, np.integer, float))
-                or not np.isfinite(hole) or int(hole) != hole or not 0 <= hole < len(loops)):
-            raise MeshRepairError(f"hole must be an integer in [0, {len(loops) - 1}] (the mesh "
-                                  f"has {len(loops)} boundary loops, longest first), got {hole}")
-        b0 = loops[int(hole)]
-        if len(np.unique(b0)) != len(b0):
-            raise MeshRepairError(f"boundary loop {hole} passes twice through a vertex (a "
-                                  "pinched hole); it cannot be stitched to one template loop")
+                or not np.isfinite(hole) or int(hole) != hole or not 0 <= hole < len(holes)):
+            raise MeshRepairError(f"hole must be an integer in [0, {len(holes) - 1}] (the mesh "
+                                  f"has {len(holes)} holes, longest first, numbered as "
+                                  f"'meshrepair fill --list' shows them), got {hole}")
+        h = holes[int(hole)]
+        if h.pinched:
+            raise MeshRepairError(f"hole {h.index} is pinched (it shares a vertex with another "
+                                  "hole, see 'meshrepair fill --list'); it cannot be stitched "
+                                  "to one template loop: fill it with 'meshrepair fill --holes "
+                                  f"{h.index}' or select a region around it")
+        b0 = h.vertices
         region_faces = np.zeros(0, np.int64)
         removed = np.zeros(nV, bool)
     else:

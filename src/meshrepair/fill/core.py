@@ -36,14 +36,20 @@ def _fill_core(V: np.ndarray, F: np.ndarray, holes, skip: dict[int, str], *, den
                callback: Callable[[dict], None] | None,
                progress: Callable[[int, int], None] | None = None,
                creases: bool = True, curvature: bool = True,
-               triharmonic: bool = True) -> FillResult:
+               triharmonic: bool = True, known_holes: set[int] | frozenset[int] = frozenset(),
+               kept_holes: set[int] | frozenset[int] = frozenset(),
+               notes: dict[int, str] | None = None) -> FillResult:
     from meshrepair.mesh.geometry import face_normals, sharp_edge_mask
 
     t0 = time.perf_counter()
     nV, nF = len(V), len(F)
     V1, F1, reports, t_enclose, t_initial = _place_patches(
         V, F, holes, skip, initial=initial, edge_length=edge_length, th=th, check=check,
-        progress=progress, creases=creases, curvature=curvature, triharmonic=triharmonic)
+        progress=progress, creases=creases, curvature=curvature, triharmonic=triharmonic,
+        known_holes=known_holes, kept_holes=kept_holes)
+    for rep in reports:
+        if rep.status == "filled" and notes and rep.index in notes:
+            rep.add_note(notes[rep.index])
     t2 = time.perf_counter()
     new_v = np.arange(nV, len(V1), dtype=np.int64)
     new_f = np.arange(nF, len(F1), dtype=np.int64)
@@ -120,6 +126,9 @@ def _fill_core(V: np.ndarray, F: np.ndarray, holes, skip: dict[int, str], *, den
             if rep.n_intersections:
                 log.warning("hole %d: %d face pairs of the patch intersect the mesh", i,
                             rep.n_intersections)
+    from meshrepair.fill.quality import hole_quality
+
+    hole_quality(V1, F1, reports, nV, nF)
     return FillResult(
         V=V1, F=F1, M_V=M_V, M_E=M_E, edges=topo.edges.copy(),
         history=history, holes=reports, new_vertices=new_v, new_faces=new_f,

@@ -127,7 +127,7 @@ def fill_holes(
     """
     opts = _solve_options(locals())
     from meshrepair.holes import _find_holes
-    from meshrepair.holes.border import find_borders
+    from meshrepair.holes.border import ENCLOSED, UNCERTAIN, classify_loops
     from meshrepair.mesh.array_contract import as_arrays
     from meshrepair.mesh.validate import check_mesh
 
@@ -135,13 +135,26 @@ def fill_holes(
     check_mesh(V, F, name="input mesh")
     opts = _check_options(opts)
     found = _find_holes(V, F)
-    borders = find_borders(V, F, found)
+    borders, enclosure, notes = classify_loops(V, F, found)
     skip = select_holes(found, max_hole_size=max_hole_size, keep_border=keep_border,
                         exclude=exclude, indices=holes, borders=borders)
+    # loops the rest of the surface encloses, and loops the caller asked for, are never refused
+    known = {i for i, w in enclosure.items() if w >= ENCLOSED}
+    if holes is not None:
+        known |= {int(i) for i in ([holes] if isinstance(holes, int) else holes)}
     check_budget([h for h in found if h.index not in skip], edge_length, what="fill_holes")
     log.info("fill_holes: %d holes found, %d selected%s", len(found), len(found) - len(skip),
              f" ({len(borders)} open border(s) left open)" if borders else "")
-    res = _fill_core(V, F, found, skip, **opts)
+    # uncertain: partly enclosed, not a border by size; an intersecting patch is kept and said
+    uncertain = {i for i, w in enclosure.items()
+                 if UNCERTAIN <= w < ENCLOSED and i not in borders and i not in known}
+    for i in uncertain:
+        notes[i] = (f"uncertain: the rest of the surface encloses it only partly (winding "
+                    f"{enclosure[i]:.2f}; holes of closed bodies >= {ENCLOSED:g}): filled; "
+                    f"check it, or keep it open with exclude=[{i}] (CLI --exclude {i})")
+    res = _fill_core(V, F, found, skip, **opts, known_holes=known, kept_holes=uncertain,
+                     notes=notes)
+    res.params.update(enclosure={int(i): round(w, 4) for i, w in enclosure.items()})
     res.params.update(max_hole_size=max_hole_size, keep_border=keep_border,
                       exclude=list(exclude), holes=None if holes is None else list(holes))
     return res

@@ -22,6 +22,7 @@ def inpaint(
     F,
     region,
     *,
+    keep_border: bool = False,
     denoise: bool = False,
     initial: str = "bilaplacian",
     refine: bool = True,
@@ -49,12 +50,22 @@ def inpaint(
     ``FillResult.removed_faces``); the vertices no longer used by any face are dropped; every hole
     this opens is filled as in :func:`fill_holes`. Holes the input already had are left alone.
 
+    Inpainting never closes what the user did not mark: a region that reaches an open border
+    (or a hole) of the input would merge with it into one loop, and filling that loop would
+    close the border too. By default such a loop is refused (its report says so); with
+    ``keep_border=True`` the faces touching the input's boundary are kept (a one-face strip
+    along the border), so the region opens a hole of its own, which is filled, and the border
+    stays open (the hole's note says so).
+
     Parameters
     ----------
     V : (nV, 3) float array, or a ``trimesh.Trimesh`` (then pass ``F=None``)
     F : (nF, 3) int array or None
     region : vertex indices, a bool (or 0/1) mask of length nV, ``("sphere", center, radius)`` or
         ``("box", lo, hi)`` (see :func:`region_mask`).
+    keep_border : bool
+        Where the region reaches an open border of the input: False (default) refuses to fill
+        the merged loop; True keeps the faces along the border and fills the rest.
     denoise, initial, refine, edge_length, lam, th, a, max_iter, tol, rings, relax, inner_solver,
     inner_iters, check, callback, progress, creases, curvature, triharmonic : as in
         :func:`fill_holes`.
@@ -85,7 +96,17 @@ def inpaint(
     if not vmask.any():
         raise MeshRepairError("the inpainting region contains no vertex of the mesh; check its "
                               "position and size (coordinates are in mesh units)")
-    removed, notes = _remove_region(F, nV, vmask)
+    if not isinstance(keep_border, (bool, np.bool_)):
+        raise MeshRepairError(f"keep_border must be True or False, got {keep_border!r}")
+    from meshrepair.mesh.topology import edge_topology
+
+    topo0 = edge_topology(F, nV)
+    on_border = np.zeros(nV, bool)
+    on_border[topo0.edges[topo0.boundary].ravel()] = True
+    protect = on_border[F].any(axis=1) & vmask[F].any(axis=1) if keep_border else None
+    removed, notes = _remove_region(F, nV, vmask, protect=protect)
+    if protect is not None and protect.any():
+        notes.append(f"{int(protect.sum())} faces along the open border kept (keep_border)")
     if removed.all():
         raise MeshRepairError("the inpainting region covers the whole mesh; nothing would be "
                               "left to fill from: use a smaller region")
@@ -112,6 +133,21 @@ def inpaint(
         lp = kept[h.vertices]
         if set(zip(lp.tolist(), np.roll(lp, -1).tolist(), strict=True)) <= old_edges:
             skip[h.index] = "hole of the input, not part of the region (use fill_holes for it)"
+    # a loop through a vertex of the input's boundary: the region merged with an open border
+    # (or a hole) of the input; filling it would close what the user did not mark
+    border_v = np.flatnonzero(on_border[kept])
+    touch = np.zeros(len(V2), bool)
+    touch[border_v] = True
+    touched: list[int] = []
+    for h in found:
+        if h.index not in skip and touch[h.vertices].any():
+            n_old = int(touch[h.vertices].sum())
+            skip[h.index] = (f"the region reaches an open border (or a hole) of the input: this "
+                             f"loop runs along {n_old} of its boundary vertices, and filling it "
+                             "would close that border too; left open. Use keep_border=True "
+                             "(CLI --keep-border) to fill the region and keep the border open, "
+                             "or a region away from the border")
+            touched.append(h.index)
     # removal that cuts a component into several large parts: refuse the loops of those parts
     from meshrepair.mesh.topology import connected_components
 
@@ -131,6 +167,16 @@ def inpaint(
     res = _fill_core(V2, F2, found, skip, **opts)
     res.vertex_map = vmap
     res.removed_faces = np.flatnonzero(removed).astype(np.int64)
-    res.params.update(region_vertices=int(vmask.sum()), removal_notes=notes)
+    res.params.update(region_vertices=int(vmask.sum()), removal_notes=notes,
+                      keep_border=bool(keep_border),
+                      border="kept: faces along the open border not removed" if (
+                          protect is not None and protect.any()) else
+                      "refused: the region reaches an open border" if touched else
+                      "the region does not reach an open border")
+    if protect is not None and protect.any():
+        for h in res.holes:
+            if h.status == "filled":
+                h.add_note("the region reached an open border of the input: the faces along "
+                           "the border were kept and the border left open (keep_border)")
     res.holes = [h for h in res.holes if not h.reason.startswith("hole of the input")]
     return res

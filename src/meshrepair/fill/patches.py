@@ -52,6 +52,7 @@ def _drop_patches(V1: np.ndarray, F1: np.ndarray, reports: list[HoleReport], nV:
     for rep in reports:
         if rep.index in drop:
             rep.status, rep.reason = "skipped", drop[rep.index]
+            rep.note = ""
             rep.n_new_vertices = rep.n_new_faces = 0
             rep.n_creases = 0
             rep.sharp_edges = np.empty((0, 2), np.int64)

@@ -61,10 +61,16 @@ are."""
 def _place_patches(V: np.ndarray, F: np.ndarray, holes, skip: dict[int, str], *, initial: str,
                    edge_length: float | None, th: float, check: bool,
                    progress: Callable[[int, int], None] | None, creases: bool, curvature: bool,
-                   triharmonic: bool
+                   triharmonic: bool, known_holes: set[int] | frozenset[int] = frozenset(),
+                   kept_holes: set[int] | frozenset[int] = frozenset()
                    ) -> tuple[np.ndarray, np.ndarray, list[HoleReport], float, float]:
     """Enclose the selected holes and place their patches; returns ``(V1, F1, reports,
-    t_enclose, t_initial)`` with the refused patches already removed (their reports say why)."""
+    t_enclose, t_initial)`` with the refused patches already removed (their reports say why).
+
+    ``known_holes``: loops known to be holes (the rest of the surface encloses them, or the
+    caller selected them): never refused; a patch lying on the surface, or still intersecting
+    it after every enclosing method, is kept, with a note in its report. ``kept_holes``: more
+    loops whose intersecting patch is kept with a note (the uncertain ones)."""
     nV, nF = len(V), len(F)
     by_index = {h.index: h for h in holes}
     stage: dict[int, int] = {}  # hole index -> position in its list of enclosing methods
@@ -73,6 +79,7 @@ def _place_patches(V: np.ndarray, F: np.ndarray, holes, skip: dict[int, str], *,
     seam_prev: dict[int, float] = {}  # hole -> seam angle of its planar patch (seam trial)
     locked: set[int] = set()
     revert: list[int] = []
+    unpair: set[int] = set()  # loops whose annulus intersected: enclosed without their island
     while True:
         ta = time.perf_counter()
         method = {h.index: _enclose_methods(h)[stage.get(h.index, 0)] for h in holes}
@@ -81,7 +88,7 @@ def _place_patches(V: np.ndarray, F: np.ndarray, holes, skip: dict[int, str], *,
             sharp_v = np.flatnonzero(_sharp_vertices(V, F, th, nV))
         V1, F1, reports = enclose_holes(
             V, F, holes, skip, edge_length=edge_length, check=check, intersections=False,
-            method=method, creases=routes,
+            method=method, creases=routes, known_holes=known_holes, unpair=set(unpair),
             progress=None if progress is None or not first else progress)
         first = False
         tb = time.perf_counter()
@@ -122,6 +129,7 @@ def _place_patches(V: np.ndarray, F: np.ndarray, holes, skip: dict[int, str], *,
             V1 = _finite_rows(V1, Vm, np.arange(nV, len(V1)), "the thin-plate fairing")
         drop: dict[int, str] = {}
         retry: list[int] = []
+        again = False
         if check:
             dropped = np.zeros(len(F1), bool)  # faces of patches already refused
             blocks = _blocks(reports, nV, nF)
@@ -188,13 +196,32 @@ def _place_patches(V: np.ndarray, F: np.ndarray, holes, skip: dict[int, str], *,
                     continue
                 tried = ", ".join(_METHOD_NAMES[m] for m in _enclose_methods(by_index[i])
                                   ) if not rep.reason.startswith("annulus") else "annulus"
+                if rep.reason.startswith("annulus") and i not in unpair:
+                    # the loop and the island it was paired with are enclosed separately: an
+                    # island found by the planar view can be a hole next to it (a cut near a
+                    # statue's flat base)
+                    log.info("hole %d: its annulus intersects the mesh (%d face pairs); "
+                             "enclosing it and its island separately", i, n_x)
+                    unpair.add(i)
+                    again = True
+                    continue
+                if i in known_holes or i in kept_holes:
+                    dropped[bf] = False
+                    note = (f"the patch intersects the surface ({n_x} face pairs; tried: "
+                            f"{tried}); kept, not refused (a hole of a closed surface, a selected "
+                            "or an uncertain loop): check it")
+                    if note not in rep.note:
+                        rep.add_note(note)
+                        log.warning("hole %d: %s", i, note)
+                    continue
                 drop[i] = (f"the patch would intersect the surface ({n_x} face pairs; tried: "
                            f"{tried}): the loop is too twisted for a direct fill (e.g. it wraps "
                            "round a thin wall or is the border of an open scan: use "
-                           "keep_border); exclude it or fill it manually")
+                           f"keep_border); keep the patch anyway by selecting it (holes=[{i}], "
+                           f"CLI --holes {i})")
         t_enclose += tb - ta
         t_initial += time.perf_counter() - tb
-        if not retry and not revert:
+        if not retry and not revert and not again:
             break
         for i in retry:
             stage[i] = stage.get(i, 0) + 1

@@ -55,19 +55,21 @@ def region_mask(V: np.ndarray, region) -> np.ndarray:
     return read_vertex_mask(np.asarray(region), nV)
 
 
-def _remove_region(F: np.ndarray, nV: int, vmask: np.ndarray, max_rounds: int = 20
-                   ) -> tuple[np.ndarray, list[str]]:
+def _remove_region(F: np.ndarray, nV: int, vmask: np.ndarray, max_rounds: int = 20,
+                   protect: np.ndarray | None = None) -> tuple[np.ndarray, list[str]]:
     """Faces to remove for a damaged vertex region, bool ``(nF,)``, and notes.
 
     Removed: every face with a corner in the region; then, repeatedly, kept faces left with two
     or three boundary edges next to the removed ones (dangling ears) and all faces around a vertex
     the removal left pinched (its remaining faces form several fans), so the holes are bounded by
     simple loops; finally kept pieces that the removal cut off and that are smaller than the
-    removed area around them (islands inside the region).
+    removed area around them (islands inside the region). Faces marked in ``protect`` (bool
+    ``(nF,)``) are never removed.
     """
     from meshrepair.mesh.validate import check_mesh  # noqa: F401  (validated by the caller)
 
-    removed = vmask[F].any(axis=1)
+    keep_always = np.zeros(len(F), bool) if protect is None else np.asarray(protect, bool)
+    removed = vmask[F].any(axis=1) & ~keep_always
     notes: list[str] = []
     n_ear = n_pinch = n_island = 0
     for _ in range(max_rounds):
@@ -80,7 +82,7 @@ def _remove_region(F: np.ndarray, nV: int, vmask: np.ndarray, max_rounds: int = 
         # ears next to the removed region: kept faces with >= 2 boundary edges that were interior
         touch = np.zeros(nV, bool)
         touch[F[removed].ravel()] = True
-        ear = (nb >= 2) & touch[F[keep]].any(axis=1)
+        ear = (nb >= 2) & touch[F[keep]].any(axis=1) & ~keep_always[keep]
         if ear.any():
             removed[keep[ear]] = True
             n_ear += int(ear.sum())
@@ -88,7 +90,9 @@ def _remove_region(F: np.ndarray, nV: int, vmask: np.ndarray, max_rounds: int = 
             continue
         pinched = _pinched(F[keep], nV) & touch
         if pinched.any():
-            sel = pinched[F[keep]].any(axis=1)
+            sel = pinched[F[keep]].any(axis=1) & ~keep_always[keep]
+            if not sel.any():
+                break
             removed[keep[sel]] = True
             n_pinch += int(sel.sum())
             changed = True
@@ -115,7 +119,7 @@ def _remove_region(F: np.ndarray, nV: int, vmask: np.ndarray, max_rounds: int = 
                 biggest = parts[np.argmax(sizes[parts])]
                 for p in parts:
                     if p != biggest and sizes[p] < n_removed_orig[oc]:
-                        sel = comp_of_face == p
+                        sel = (comp_of_face == p) & ~keep_always[keep]
                         removed[keep[sel]] = True
                         n_island += int(sel.sum())
     if n_ear:

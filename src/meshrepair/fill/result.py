@@ -102,4 +102,10 @@ class FillResult:
                     if h.status == "filled" else f"skipped: {h.reason}")
             lines.append(f"  hole {h.index}: {h.n_boundary} boundary edges, length "
                          f"{h.length:.6g}: {what}")
+            if h.quality:
+                from meshrepair.fill.quality import quality_line
+
+                lines.append(f"    quality: {quality_line(h.quality)}")
+            if h.note:
+                lines.append(f"    note: {h.note}")
         return "\n".join(lines)

@@ -71,6 +71,12 @@ class HoleReport:
         Crease segments routed through the patch (:mod:`meshrepair.holes.creases`).
     sharp_edges : (q, 2) int64
         Patch edges on those creases (output vertex numbering), MC penalty in the solve.
+    note : str
+        What the user should check about a filled hole (an uncertain border decision, a patch
+        kept although it lies on or intersects the surface), empty when nothing.
+    quality : dict
+        Per-hole read-out of a filled hole (:func:`meshrepair.fill.quality.hole_quality`):
+        ``seam_deg``, ``surround_deg``, ``curvature_ratio``, ``check``.
     """
 
     index: int
@@ -85,13 +91,20 @@ class HoleReport:
     n_creases: int = 0
     sharp_edges: np.ndarray = field(default_factory=lambda: np.empty((0, 2), np.int64),
                                     repr=False)
+    note: str = ""
+    quality: dict = field(default_factory=dict)
+
+    def add_note(self, text: str) -> None:
+        """Append ``text`` to :attr:`note` (``"; "``-separated)."""
+        self.note = f"{self.note}; {text}" if self.note else text
 
     def as_dict(self) -> dict:
         """The report as plain Python values (for JSON logs)."""
         return {"index": self.index, "n_boundary": self.n_boundary, "length": self.length,
                 "status": self.status, "reason": self.reason,
                 "n_new_vertices": self.n_new_vertices, "n_new_faces": self.n_new_faces,
-                "n_intersections": self.n_intersections, "n_creases": self.n_creases}
+                "n_intersections": self.n_intersections, "n_creases": self.n_creases,
+                "note": self.note, "quality": dict(self.quality)}
 
 
 def _split_simple(loop: list[int]) -> list[list[int]]:
@@ -225,7 +238,8 @@ def select_holes(holes: Sequence[Hole], *, max_hole_size: int | None = None,
     skipped: dict[int, str] = {}
     for h in holes:
         if keep_border and h.index == 0:
-            skipped[h.index] = "kept as the mesh border (keep_border: longest loop)"
+            skipped[h.index] = ("kept as the mesh border (keep_border: longest loop); fill it "
+                                "without keep_border (CLI --keep-border)")
         elif h.index in excl:
             skipped[h.index] = "excluded"
         elif only is not None and h.index not in only:
@@ -233,5 +247,7 @@ def select_holes(holes: Sequence[Hole], *, max_hole_size: int | None = None,
         elif borders and h.index in borders and only is None:
             skipped[h.index] = borders[h.index]
         elif max_hole_size is not None and h.n_boundary > max_hole_size:
-            skipped[h.index] = f"larger than max_hole_size ({h.n_boundary} > {max_hole_size})"
+            skipped[h.index] = (f"larger than max_hole_size ({h.n_boundary} > {max_hole_size}); "
+                                f"fill it with a larger max_hole_size (CLI --max-hole-size) or "
+                                f"holes=[{h.index}] (CLI --holes {h.index})")
     return skipped

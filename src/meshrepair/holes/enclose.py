@@ -87,7 +87,9 @@ def enclose_holes(V: np.ndarray, F: np.ndarray, holes: Sequence[Hole],
                   check: bool = True, intersections: bool = True,
                   method: str | Mapping[int, str] = "auto",
                   creases: Mapping[int, np.ndarray] | None = None,
-                  progress: Callable[[int, int], None] | None = None
+                  progress: Callable[[int, int], None] | None = None,
+                  known_holes: set[int] | frozenset[int] = frozenset(),
+                  unpair: set[int] | frozenset[int] = frozenset()
                   ) -> tuple[np.ndarray, np.ndarray, list[HoleReport]]:
     """Enclose the selected holes of a mesh with initial (membrane) patches.
 
@@ -114,6 +116,12 @@ def enclose_holes(V: np.ndarray, F: np.ndarray, holes: Sequence[Hole],
         (constrained edges of the planar triangulation, see :mod:`.creases`).
     progress : callable, optional
         Called as ``progress(done, total)`` before each selected hole is enclosed.
+    known_holes : set of int
+        Loops known to be holes (enclosed by the rest of the surface, or asked for): a patch
+        lying on the surface is kept with a note in the report instead of refused.
+    unpair : set of int
+        Loops never paired with an island (each is enclosed on its own): the caller's retry
+        when their annulus intersects the surface.
 
     Returns
     -------
@@ -138,7 +146,8 @@ def enclose_holes(V: np.ndarray, F: np.ndarray, holes: Sequence[Hole],
     for h in holes:  # holes are sorted longest first
         longest_of_component.setdefault(h.component, h.index)
 
-    partner = pair_islands(V, F, holes)
+    partner = {a: b for a, b in pair_islands(V, F, holes).items()
+               if a not in unpair and b not in unpair}
     for h in holes:
         if h.index in partner:
             o = partner[h.index]
@@ -156,6 +165,7 @@ def enclose_holes(V: np.ndarray, F: np.ndarray, holes: Sequence[Hole],
     newV: list[np.ndarray] = []
     newF: list[np.ndarray] = []
     n_added = 0
+    notes: dict[int, str] = {}
     todo = [h for h in holes if h.index not in skip]
     n_todo, n_done = len(todo), 0
     for h in holes:
@@ -241,11 +251,15 @@ def enclose_holes(V: np.ndarray, F: np.ndarray, holes: Sequence[Hole],
         if check and m > 0:
             hh = h_len if h_len is not None else h.length / h.n_boundary
             Vl, Fl, Fpl, il = fbox.local(Vp, Fp, newV, newF, nV, pad=2.0 * hh)
-            reason = _patch_problem(Vl, Fl, Fpl, il, hh, intersections,
-                                    border=h.index == longest_of_component[h.component])
+            reason, note = _patch_problem(Vl, Fl, Fpl, il, hh, intersections,
+                                          border=h.index == longest_of_component[h.component],
+                                          hole=h.index in known_holes)
             if reason:
                 rep.reason = reason
                 continue
+            if note:
+                log.warning("hole %d: %s", h.index, note)
+                notes[h.index] = note
         newV.append(Vp)
         newF.append(Fp)
         n_added += m
@@ -259,6 +273,8 @@ def enclose_holes(V: np.ndarray, F: np.ndarray, holes: Sequence[Hole],
             rep.sharp_edges = gmap[patch.sharp_edges]
             rep.n_creases = patch.n_creases
             rep.reason += f", {patch.n_creases} crease{'s' if patch.n_creases > 1 else ''}"
+        if h.index in notes:
+            rep.add_note(notes[h.index])
         if h.index in partner:
             isl = by_index[partner[h.index]]
             rep.reason = f"annulus with island hole {isl.index}"

@@ -112,6 +112,10 @@ def _bary(Q: np.ndarray, Tc: np.ndarray, t: np.ndarray, x: np.ndarray) -> np.nda
     return np.stack([1.0 - b1 - b2, b1, b2], axis=-1)
 
 
+STEINER_FACTOR = 8.0
+"""Triangle may add at most this many times the expected number of patch vertices (layout
+area over the target triangle area) as Steiner points; a layout needing more is given up."""
+
 LOCATE_MAX_PAIRS = 64
 """Average (cell, triangle) incidences per triangle above which :func:`_locate` coarsens its
 grid (bounds its memory at O(triangles + points))."""
@@ -217,6 +221,8 @@ def _refine_on_triangulation(k: int, S: np.ndarray, Ts: np.ndarray, Qs: np.ndarr
     -------
     (X (m, 3), T (t, 3), X2 (m, 2)), or None if Triangle changed the loop vertices.
     """
+    import triangle
+
     Q = Qs[:k]
     segs = np.c_[np.arange(k), (np.arange(k) + 1) % k]
     if creases is not None and len(creases):
@@ -242,10 +248,21 @@ def _refine_on_triangulation(k: int, S: np.ndarray, Ts: np.ndarray, Qs: np.ndarr
     if not isometric:
         amax *= float(areas(Qs, Ts).sum()) / max(float(areas(S, Ts).sum()), 1e-300)
     opts = f"pYQq{MIN_ANGLE:g}"
-    # Triangle's work is capped (a loop through a far-away vertex is a sliver whose quality
-    # mesh is unbounded): the two refinement rounds share the cap of the first call
-    cap = steiner_cap(Q, k, amax)
-    out = triangulate_capped({"vertices": Q, "segments": segs}, opts + _area_switch(amax), cap)
+    if isometric:
+        # developed layout: Steiner points bounded at STEINER_FACTOR times the target count
+        # (folds meeting a loop vertex at tiny angles can make Triangle's quality refinement run
+        # away: a 105-loop gave 1.2 M triangles); reaching the bound gives the layout up (None),
+        # and the caller falls back to the mean-value layout
+        cap = int(STEINER_FACTOR * float(areas(Qs, Ts).sum()) / amax) + 4 * k + 100
+        out = triangle.triangulate({"vertices": Q, "segments": segs},
+                                   opts + f"S{cap}" + _area_switch(amax))
+    else:
+        # mean-value layout: the last resort, capped too (a loop through a far-away vertex is a
+        # sliver whose quality mesh is unbounded): past the cap, MeshRepairError; the two
+        # refinement rounds share the cap of the first call
+        cap = steiner_cap(Q, k, amax)
+        out = triangulate_capped({"vertices": Q, "segments": segs}, opts + _area_switch(amax),
+                                 cap)
     for _ in range(0 if isometric else 2):
         X2 = np.asarray(out["vertices"], dtype=np.float64)
         T = np.asarray(out["triangles"], dtype=np.int64)
@@ -258,7 +275,8 @@ def _refine_on_triangulation(k: int, S: np.ndarray, Ts: np.ndarray, Qs: np.ndarr
                                  cap - (len(X2) - k))
     X2 = np.asarray(out["vertices"], dtype=np.float64)
     T = np.asarray(out.get("triangles", np.empty((0, 3))), dtype=np.int64).reshape(-1, 3)
-    if len(T) == 0 or len(X2) < k or not np.allclose(X2[:k], Q):
+    if len(T) == 0 or len(X2) < k or not np.allclose(X2[:k], Q) \
+            or (isometric and len(X2) - k >= cap):
         return None
     return lift(X2), T, X2
 

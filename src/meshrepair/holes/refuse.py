@@ -69,26 +69,39 @@ class _LocalFaces:
 
 
 def _patch_problem(V: np.ndarray, F: np.ndarray, Fp: np.ndarray, interior: np.ndarray,
-                   h: float, intersections: bool, border: bool = True) -> str:
-    """Reason to refuse a patch (empty string if fine). ``border``: the loop is the longest of
-    its component (only such a loop is said to be a border)."""
+                   h: float, intersections: bool, border: bool = True,
+                   hole: bool = False) -> tuple[str, str]:
+    """Reason to refuse a patch (empty string if fine) and a note for a kept one.
+
+    ``border``: the loop is the longest of its component (only such a loop is said to be a
+    border). ``hole``: the loop is known to be a hole (the rest of the surface encloses it,
+    :mod:`.closure`, or the caller asked for it): a patch lying on the surface is kept, with a
+    note saying so, instead of refused.
+    """
     from meshrepair.metrics import point_to_surface
 
     # a few interior vertices near the surface say nothing (a crease corner of a small hole
     # lies close to the surround): the test is for big patches doubling a sheet
     if len(F) and len(interior) >= 8:
         d = point_to_surface(V[interior], V, F)
-        if np.mean(d < 0.2 * h) > 0.5:
+        near = float(np.mean(d < 0.2 * h))
+        if near > 0.5:
+            if hole:
+                return "", (f"uncertain: {near:.0%} of the patch lies within 0.2 edge lengths "
+                            "of the existing surface (a doubled sheet?): check it")
             if border:
                 return ("the patch would lie on the existing surface (the loop is probably the "
-                        "outer border of an open surface: use keep_border or exclude it)")
+                        "outer border of an open surface, which the rest of the surface does "
+                        "not enclose); fill it anyway by selecting it (holes=[...], CLI "
+                        "--holes)"), ""
             return ("the patch would lie on the existing surface (another sheet of the mesh "
-                    "covers the hole); exclude it or fill it manually")
+                    "covers the hole); fill it anyway by selecting it (holes=[...], CLI "
+                    "--holes)"), ""
     if not intersections:
-        return ""
+        return "", ""
     Fall = np.r_[F, Fp]
     pairs = self_intersections(V, Fall, np.arange(len(F), len(Fall)))
     if len(pairs):
         return (f"the patch would intersect the surface ({len(pairs)} face pairs): the loop is "
-                "too twisted for a direct fill; exclude it or fill it manually")
-    return ""
+                "too twisted for a direct fill; exclude it or fill it manually"), ""
+    return "", ""

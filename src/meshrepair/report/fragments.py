@@ -69,10 +69,17 @@ def hole_table(holes: Sequence[Mapping]) -> str:
         return '<p class="note">The mesh had no holes.</p>'
     cols = [("index", "hole"), ("n_boundary", "boundary edges"), ("length", "length"),
             ("status", "status"), ("reason", "how / why"), ("n_new_vertices", "new vertices"),
-            ("n_new_faces", "new faces"), ("n_intersections", "intersections")]
+            ("n_new_faces", "new faces"), ("n_intersections", "intersections"),
+            ("seam", "seam° (surround°)"), ("curvature_ratio", "curvature / surround's"),
+            ("check", "check"), ("note", "note")]
     out = ["<table>", "<tr>" + "".join(f"<th>{_esc(h)}</th>" for _, h in cols) + "</tr>"]
     for rec in holes:
         rec = dict(rec) if isinstance(rec, Mapping) else dict(rec.as_dict())
+        q = rec.get("quality") or {}
+        if q:  # the per-hole read-out of meshrepair.fill.quality
+            rec["seam"] = f"{q['seam_deg']:.1f} ({q['surround_deg']:.1f})"
+            rec["curvature_ratio"] = q["curvature_ratio"]
+            rec["check"] = q.get("why") or "-"
         cells = []
         for key, _ in cols:
             v = rec.get(key, "")
