@@ -22,13 +22,11 @@ of a square has ``va / A ≈ 1`` and ``L² / 4πA ≥ 4/π``. Both thresholds le
 A loop the size rule calls a border is still a *hole* when the rest of the surface encloses the
 region it bounds (:func:`meshrepair.holes.closure.loop_enclosure` at least
 :data:`ENCLOSED`): a body closed apart from its holes is never left open because one of them
-is large. The enclosure of the borders of the open scans is 0.79 (kinect_pyramid) and 0.75
-(rabbit_scan); of the holes of closed bodies at least 0.88 (nicolo's cut base; discs of 24 l̄
-cut from twelve 0.89). :data:`ENCLOSED` is the midpoint of the first half of these (kinect,
-nicolo, fandisk, spot, twelve, rocker_arm cut at 8 and 24 l̄); the other half (rabbit_scan,
-camelhead, bunny, screwdriver, trim_star, sharp_sphere, nefertiti) falls on the same sides
-except one disc of 24 l̄ cut from the small screwdriver (0.82), which the size rule does not
-call a border either.
+is large. On the shared meshes the enclosure of the open scans' borders is 0.75-0.79 and that
+of the holes of closed bodies at least 0.88 (cut bases, discs of 8 and 24 l̄); :data:`ENCLOSED`
+is the midpoint of the gap on one half of the meshes, and the other half falls on the same
+sides except one disc of 24 l̄ cut from a small CAD part (0.82), which the size rule does not
+call a border either (docs/holes.md lists the readings).
 """
 
 from __future__ import annotations
