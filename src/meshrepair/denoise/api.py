@@ -192,6 +192,7 @@ def denoise(
     """
     from meshrepair.mesh.array_contract import as_arrays
 
+    options = {k: v for k, v in locals().items() if k in _OPTION_DEFAULTS}
     V, F = as_arrays(V, F)
     if callback is not None and not callable(callback):
         raise MeshRepairError(f"callback must be callable or None, got {type(callback).__name__}")
@@ -199,8 +200,7 @@ def denoise(
         if not isinstance(plan, DenoisePlan):
             raise MeshRepairError(f"plan must be a DenoisePlan from mr.plan_denoise, got "
                                   f"{type(plan).__name__}")
-        given = {k: v for k, v in locals().items() if k in _OPTION_DEFAULTS
-                 and not _same(v, _OPTION_DEFAULTS[k])}
+        given = [k for k, v in options.items() if not _same(v, _OPTION_DEFAULTS[k])]
         if given:
             raise MeshRepairError(f"with plan=, leave the other options at their defaults "
                                   f"(got {', '.join(sorted(given))}); change the plan instead, "
@@ -208,13 +208,7 @@ def denoise(
         with heap_allocations():
             return _execute(plan, V, F, callback)
     with heap_allocations():
-        return _denoise(V, F, lam=lam, th=th, a=a, robust_iters=robust_iters,
-                        feature_iters=feature_iters, mask_update_every=mask_update_every,
-                        min_feature_edges=min_feature_edges, tol=tol, unfold=unfold,
-                        inner_solver=inner_solver, inner_iters=inner_iters,
-                        n_solver=n_solver, stages=stages, huber_delta=huber_delta,
-                        willmore_weight=willmore_weight, regions=regions, polish=polish,
-                        callback=callback)
+        return _denoise(V, F, callback=callback, **options)
 
 
 def plan_denoise(
@@ -255,14 +249,10 @@ def plan_denoise(
     """
     from meshrepair.mesh.array_contract import as_arrays
 
+    options = {k: v for k, v in locals().items() if k in _OPTION_DEFAULTS}
     V, F = as_arrays(V, F)
     with heap_allocations():
-        return _plan(V, F, lam=lam, th=th, a=a, robust_iters=robust_iters,
-                     feature_iters=feature_iters, mask_update_every=mask_update_every,
-                     min_feature_edges=min_feature_edges, tol=tol, unfold=unfold,
-                     inner_solver=inner_solver, inner_iters=inner_iters, n_solver=n_solver,
-                     stages=stages, huber_delta=huber_delta, willmore_weight=willmore_weight,
-                     regions=regions, polish=polish)
+        return _plan(V, F, **options)
 
 
 _OPTION_DEFAULTS = {k: p.default for k, p in inspect.signature(plan_denoise).parameters.items()
