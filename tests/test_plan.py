@@ -95,6 +95,8 @@ def test_plan_misuse_is_refused(noisy_fandisk, heavy_spot):
     p = mr.plan_denoise(V, F)
     with pytest.raises(MeshRepairError, match="another mesh"):
         mr.denoise(*heavy_spot, plan=p)
+    with pytest.raises(MeshRepairError, match="another mesh"):  # same size, other vertices
+        mr.denoise(V + 1e-3, F, plan=p)
     with pytest.raises(MeshRepairError, match="leave the other options"):
         mr.denoise(V, F, plan=p, lam=0.5)
     with pytest.raises(MeshRepairError, match="DenoisePlan"):

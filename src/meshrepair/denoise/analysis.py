@@ -92,7 +92,18 @@ class _State:
     robust_iters: int
     probe: bool
     presmoothed: bool
+    mesh_key: str = ""
     presmooth: dict | None = None
+
+
+def mesh_key(V: np.ndarray, F: np.ndarray) -> str:
+    """A digest of the arrays a plan reads: a plan runs only on the mesh it was made from."""
+    import hashlib
+
+    h = hashlib.blake2b(digest_size=16)
+    h.update(np.ascontiguousarray(V, dtype=np.float64).tobytes())
+    h.update(np.ascontiguousarray(F, dtype=np.int64).tobytes())
+    return h.hexdigest()
 
 
 def _checked(lam, th, a, robust_iters, feature_iters, mask_update_every, min_feature_edges, tol,
@@ -312,7 +323,7 @@ def _plan(V, F, *, lam, th, a, robust_iters, feature_iters, mask_update_every,
                 Vd=Vd, Vi=Vi, opts_kw=opts_kw, force=force, flat=flat, anchor=anchor, sup=sup,
                 sup_v=sup_v, r1=r1, r1_V=r1_V, info=info, auto_robust=auto_robust,
                 auto_inner=auto_inner, robust_iters=int(robust_iters), probe=bool(probe),
-                presmoothed=bool(presmoothed))
+                presmoothed=bool(presmoothed), mesh_key=mesh_key(V, F))
     kp = 0
     inner_plan = None
     if sup_v is not None and willmore_weight is None and lam is None and not presmoothed:

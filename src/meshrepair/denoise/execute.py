@@ -12,7 +12,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from meshrepair.denoise.analysis import _State
+from meshrepair.denoise.analysis import _State, mesh_key
 from meshrepair.denoise.finish import REINTEGRATE_KEEPS_FOLDS, finish_result
 from meshrepair.denoise.folds import (
     COLLAPSE_VOLUME_RATIO,
@@ -37,7 +37,8 @@ def _execute(plan: DenoisePlan, V, F, callback=None) -> DenoiseResult:
     if st is None:
         raise MeshRepairError("this plan carries no reading of a mesh (DenoiseResult.plan is a "
                               "record of what ran): make a plan with mr.plan_denoise(V, F)")
-    if plan.n_vertices != len(V) or plan.n_faces != len(F):
+    if (plan.n_vertices != len(V) or plan.n_faces != len(F)
+            or st.mesh_key != mesh_key(V, F)):
         raise MeshRepairError("this plan was made for another mesh: make it with "
                               "mr.plan_denoise(V, F) on the mesh you denoise")
     o = plan.options
