@@ -10,16 +10,16 @@ is a frozen :class:`~meshrepair.denoise.plan.DenoisePlan`. The main solve is
 from __future__ import annotations
 
 import logging
-from dataclasses import dataclass, replace
-from typing import Any
+from dataclasses import replace
 
 import numpy as np
 
 from meshrepair.denoise import coarse_lowpass as _clp
 from meshrepair.denoise import crease_network as _cn
 from meshrepair.denoise import scalefree as _sf
+from meshrepair.denoise.checks import _checked
 from meshrepair.denoise.folds import fidelity_data, unfolded_data_after_probe
-from meshrepair.denoise.plan import Decision, DenoisePlan
+from meshrepair.denoise.plan import Decision, DenoisePlan, _State, mesh_key
 from meshrepair.denoise.regions import flat_edges
 from meshrepair.denoise.rules import (
     CAD_SUPPORT,
@@ -59,94 +59,38 @@ is memory-bound there, and the reordering measured 1.33 s instead of 1.76 s per 
 coordinate-dependent ordering, which keeps the rotation test exact to rounding)."""
 
 
-@dataclass
-class _State:
-    """What the reading leaves for the executor: arrays in the solve's (possibly Morton) order
-    and in input order, the probe's result, and the reading's record ``info``."""
+def _plan(V, F, **options) -> DenoisePlan:
+    """Read ``(V, F)`` and decide (module docstring); returns the plan, runs no main solve.
 
-    topo: Any
-    report: Any
-    gamma: float
-    gamma_rms: float
-    impulsive: bool
-    n_unf: int
-    reorder: bool
-    Fw: np.ndarray
-    topo_w: Any
-    pf: Any
-    inv: Any
-    Vw: np.ndarray
-    Vd: np.ndarray
-    Vi: Any
-    opts_kw: dict
-    force: Any
-    flat: Any
-    anchor: Any
-    sup: Any
-    sup_v: Any
-    r1: Any
-    r1_V: Any
-    info: dict
-    auto_robust: bool
-    auto_inner: bool
-    robust_iters: int
-    probe: bool
-    presmoothed: bool
-    mesh_key: str = ""
-    presmooth: dict | None = None
+    When the reading finds correlated noise (an automatic Willmore weight above 1), the plan is
+    the white-noise model's, read from the same probe, and carries the correlated-noise model's
+    plan in ``if_correlated``: the executor runs the white model first and the correlated one
+    only when the white result's residual fails the white-noise test of
+    :mod:`meshrepair.denoise.whiteness`."""
+    p = _plan_one(V, F, **options)
+    first, p._state.first_probe = p._state.first_probe, None
+    if p.willmore_weight <= 1.0 or options.get("willmore_weight") is not None:
+        return p
+    pw = _plan_one(V, F, **options, white=True, probe_result=first)
+    pw._state.first_probe = None
+    from meshrepair.denoise.whiteness import LEVEL_MAX, RHO1_MAX
+
+    dec = Decision("noise_model", "white, tested",
+                   "the reading finds correlated noise (willmore_weight "
+                   f"{p.willmore_weight:.3g}); the white model runs first and the correlated "
+                   f"plan below only if the residual fails the white-noise test (one-ring "
+                   f"correlation ρ₁ > {RHO1_MAX:g} or level > {LEVEL_MAX:g} γ̂; whiteness.py)",
+                   {"rho": p.reading["noise_rho"], "willmore_weight": p.willmore_weight})
+    return replace(pw, decisions=pw.decisions + (dec,), if_correlated=p)
 
 
-def mesh_key(V: np.ndarray, F: np.ndarray) -> str:
-    """A digest of the arrays a plan reads: a plan runs only on the mesh it was made from."""
-    import hashlib
-
-    h = hashlib.blake2b(digest_size=16)
-    h.update(np.ascontiguousarray(V, dtype=np.float64).tobytes())
-    h.update(np.ascontiguousarray(F, dtype=np.int64).tobytes())
-    return h.hexdigest()
-
-
-def _checked(lam, th, a, robust_iters, feature_iters, mask_update_every, min_feature_edges, tol,
-             unfold, inner_solver, inner_iters, n_solver, stages, huber_delta, willmore_weight,
-             regions, polish) -> dict:
-    """Every option checked (finite, in range) before any work on the mesh."""
-    from meshrepair.options import check_bool, check_int, check_number
-
-    o = dict(
-        lam=check_number("lam", lam, low=0, allow_none=True),
-        th=th,
-        a=check_number("a", a, low=0, low_open=True),
-        robust_iters=check_int("robust_iters", robust_iters, low=0, allow_none=True),
-        feature_iters=check_int("feature_iters", feature_iters, low=0),
-        mask_update_every=check_int("mask_update_every", mask_update_every, low=0),
-        min_feature_edges=check_int("min_feature_edges", min_feature_edges, low=1),
-        inner_iters=check_int("inner_iters", inner_iters, low=1, allow_none=True),
-        tol=check_number("tol", tol, low=0, low_open=True),
-        unfold=check_bool("unfold", unfold),
-        inner_solver=inner_solver,
-        n_solver=n_solver,
-        stages=None if stages is None else tuple(stages),
-        huber_delta=check_number("huber_delta", huber_delta, low=0, low_open=True,
-                                 allow_none=True),
-        willmore_weight=check_number("willmore_weight", willmore_weight, low=0, low_open=True,
-                                     allow_none=True),
-        regions=check_bool("regions", regions),
-        polish=check_bool("polish", polish),
-    )
-    SolverOptions(th=th, tol=o["tol"], inner_solver=inner_solver,
-                  inner_iters=3 if o["inner_iters"] is None else o["inner_iters"],
-                  n_solver=n_solver, mask_update_every=o["mask_update_every"],
-                  min_feature_edges=o["min_feature_edges"],
-                  **({"stages": o["stages"]} if o["stages"] else {})).validate()
-    return o
-
-
-def _plan(V, F, *, lam, th, a, robust_iters, feature_iters, mask_update_every,
-          min_feature_edges, tol, unfold, inner_solver, inner_iters, n_solver, stages,
-          huber_delta, willmore_weight, regions, polish=True,
-          presmoothed: bool = False, read_from: np.ndarray | None = None,
-          capped: bool = False) -> DenoisePlan:
-    """Read ``(V, F)`` and decide (module docstring); returns the plan, runs no main solve."""
+def _plan_one(V, F, *, lam, th, a, robust_iters, feature_iters, mask_update_every,
+              min_feature_edges, tol, unfold, inner_solver, inner_iters, n_solver, stages,
+              huber_delta, willmore_weight, regions, polish=True,
+              presmoothed: bool = False, read_from: np.ndarray | None = None,
+              capped: bool = False, white: bool = False, probe_result=None) -> DenoisePlan:
+    """One noise model's plan: the white model's with ``white`` (Willmore weight 1), else the
+    reading's; ``probe_result`` is a probe already run on this input (not run again)."""
     from meshrepair.mesh.validate import _check_mesh
 
     options = _checked(lam, th, a, robust_iters, feature_iters, mask_update_every,
@@ -219,7 +163,7 @@ def _plan(V, F, *, lam, th, a, robust_iters, feature_iters, mask_update_every,
             "willmore_weight": 1.0, "noise_rho": float("nan"), "noise_length": float("nan"),
             "noise_gamma_scale": float("nan")}
     force = flat = anchor = None
-    sup = r1 = r1_V = None
+    sup = r1 = r1_V = first_probe = None
     sup_v = None  # vertices of the crease-supported region, input order
     w_out = 1.0
     ww = 1.0 if willmore_weight is None else float(willmore_weight)
@@ -242,13 +186,18 @@ def _plan(V, F, *, lam, th, a, robust_iters, feature_iters, mask_update_every,
             return _sf.gated_probe(ADMMSolver, SolverOptions, Fw, len(V), topo_w, st1, kw,
                                    Vd, Vi, q_edges, th)
 
-        r1 = run_probe(kw1)
+        r1 = run_probe(kw1) if probe_result is None else probe_result
+        first_probe = r1
         tr = tangential_ratio(Vt_w, Fw, r1.V, topo=topo_w)
         ns = noise_scale(Vn_w, Fw, reference=r1.V, topo=topo_w)
         if willmore_weight is None:
-            ww = _clp.keep_white(willmore_weight_from_scale(ns.rho, impulsive, tr), capped)
+            ww = 1.0 if white else _clp.keep_white(
+                willmore_weight_from_scale(ns.rho, impulsive, tr), capped)
         rule = (f"willmore_weight_from_scale: clip(1 + 150 (ρ − 1.12), 1, 16) for noise "
                 f"along the normals (r_t < {TANGENTIAL_MAX:g}), not impulsive; else 1")
+        if white:
+            rule = ("the white-noise model, tried first when the reading finds correlated "
+                    "noise (noise_model)")
         dec.append(Decision("willmore_weight", ww, "set by the user" if willmore_weight
                             is not None else rule, {"rho": ns.rho, "tangential_ratio": tr,
                                                     "impulsive": float(impulsive)},
@@ -323,7 +272,7 @@ def _plan(V, F, *, lam, th, a, robust_iters, feature_iters, mask_update_every,
                 Vd=Vd, Vi=Vi, opts_kw=opts_kw, force=force, flat=flat, anchor=anchor, sup=sup,
                 sup_v=sup_v, r1=r1, r1_V=r1_V, info=info, auto_robust=auto_robust,
                 auto_inner=auto_inner, robust_iters=int(robust_iters), probe=bool(probe),
-                presmoothed=bool(presmoothed), mesh_key=mesh_key(V, F))
+                presmoothed=bool(presmoothed), mesh_key=mesh_key(V, F), first_probe=first_probe)
     kp = 0
     inner_plan = None
     if sup_v is not None and willmore_weight is None and lam is None and not presmoothed:

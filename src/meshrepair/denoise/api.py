@@ -33,6 +33,11 @@ the values it read and its rule; docs/parameters.md lists every threshold):
    sharpening of correlated noise (:mod:`meshrepair.denoise.modes`), and the correlated-noise
    low-pass (:mod:`meshrepair.denoise.corrlowpass`).
 
+*Which noise model*: when the reading finds correlated noise (w > 1 below), steps 2-4 run with
+the white-noise model (w = 1) first, and again with the correlated model only when the white
+result's residual fails the white-noise test of :mod:`meshrepair.denoise.whiteness` (one-ring
+correlation or level above the white noise's).
+
 *Coarse to fine*: heavy white noise on an organic mesh is low-passed first by Taubin λ|μ
 pairs on the input (:mod:`meshrepair.denoise.presmooth`; the length capped at the mesh's
 resolution, :mod:`meshrepair.denoise.coarse_lowpass`, read from the relief,

@@ -12,7 +12,6 @@ from dataclasses import replace
 
 import numpy as np
 
-from meshrepair.denoise.analysis import _State, mesh_key
 from meshrepair.denoise.finish import REINTEGRATE_KEEPS_FOLDS, finish_result
 from meshrepair.denoise.folds import (
     COLLAPSE_VOLUME_RATIO,
@@ -20,7 +19,7 @@ from meshrepair.denoise.folds import (
     _volume_ratio,
     unfold_result,
 )
-from meshrepair.denoise.plan import Decision, DenoisePlan
+from meshrepair.denoise.plan import Decision, DenoisePlan, _State, mesh_key
 from meshrepair.denoise.result import DenoiseResult
 from meshrepair.denoise.rules import FLAT_A, lambda_from_noise, robust_a_from_noise
 from meshrepair.errors import MeshRepairError
@@ -41,6 +40,8 @@ def _execute(plan: DenoisePlan, V, F, callback=None) -> DenoiseResult:
             or st.mesh_key != mesh_key(V, F)):
         raise MeshRepairError("this plan was made for another mesh: make it with "
                               "mr.plan_denoise(V, F) on the mesh you denoise")
+    if plan.if_correlated is not None:
+        return _execute_tested(plan, V, F, callback)
     o = plan.options
     info = dict(st.info)
     gamma, gamma_rms, impulsive, topo = st.gamma, st.gamma_rms, st.impulsive, st.topo
@@ -178,6 +179,27 @@ def _execute(plan: DenoisePlan, V, F, callback=None) -> DenoiseResult:
         # the record keeps no arrays of the reading: it would hold the probe's result alive
         plan=replace(plan, after_solve=_after(info, st.info, ()), _state=None),
     )
+
+
+def _execute_tested(plan: DenoisePlan, V, F, callback) -> DenoiseResult:
+    """The white model's plan, then the correlated model's when the white result's residual
+    fails the white-noise test (:mod:`meshrepair.denoise.whiteness`)."""
+    from meshrepair.denoise.whiteness import white_residual
+
+    st: _State = plan._state
+    r = _execute(replace(plan, if_correlated=None), V, F, callback)
+    t = white_residual(V, r.V, F, st.topo.edges, st.gamma)
+    log.info("white-noise test of the residual: rho1 %.3f, level %.3f gamma (%s)", t.rho1,
+             t.level_ratio, "white" if t.white else "correlated")
+    if not t.white and r.stop_reason != "interrupted":
+        r = _execute(plan.if_correlated, V, F, callback)
+    dec = Decision("noise_model", "white" if t.white else "correlated",
+                   "white-noise test of the white model's residual (whiteness.py)",
+                   {"rho1": t.rho1, "level_ratio": t.level_ratio})
+    r.plan = replace(r.plan, after_solve=r.plan.after_solve + (dec,))
+    r.params.update(noise_model="white" if t.white else "correlated", white_test_rho1=t.rho1,
+                    white_test_level=t.level_ratio)
+    return r
 
 
 _AFTER = {

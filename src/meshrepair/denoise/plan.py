@@ -25,6 +25,8 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field, fields
 from typing import Any
 
+import numpy as np
+
 from meshrepair.model.solver import Stage
 
 
@@ -75,6 +77,9 @@ class DenoisePlan:
         on it (coarse-to-fine; 0: none); ``inner`` is then the plan of that low-passed input
     polish : the finishing polish rule may run
     decisions : every decision above, with what it read and the rule that made it
+    if_correlated : the correlated-noise model's plan, run instead when the result of this
+        (white-noise) plan fails the white-noise test (:mod:`meshrepair.denoise.whiteness`);
+        ``None``: this plan's result is kept. Replace it by ``None`` to run this plan alone
     after_solve : decisions the executor takes on the solve's result (filled in
         :attr:`meshrepair.DenoiseResult.plan`; empty before the run)
     """
@@ -96,6 +101,7 @@ class DenoisePlan:
     # records
     decisions: tuple[Decision, ...] = ()
     inner: DenoisePlan | None = None
+    if_correlated: DenoisePlan | None = None
     after_solve: tuple[Decision, ...] = ()
     _state: Any = field(default=None, repr=False, compare=False)
 
@@ -118,6 +124,10 @@ class DenoisePlan:
             out.append(f"{indent}  then, on the input low-passed by {self.presmooth_steps} "
                        "Taubin pairs:")
             out.append(self.inner.explain(indent + "    "))
+        if self.if_correlated is not None:
+            out.append(f"{indent}  if the result's residual fails the white-noise test, "
+                       "instead:")
+            out.append(self.if_correlated.explain(indent + "    "))
         if self.after_solve:
             out.append(f"{indent}  after the solve:")
             out += [f"{indent}    {d.line()}" for d in self.after_solve]
@@ -137,3 +147,51 @@ def _fmt(v: Any) -> str:
     if isinstance(v, float):
         return "nan" if math.isnan(v) else f"{v:.4g}"
     return str(v)
+
+
+@dataclass
+class _State:
+    """What the reading leaves for the executor: arrays in the solve's (possibly Morton) order
+    and in input order, the probe's result, and the reading's record ``info``."""
+
+    topo: Any
+    report: Any
+    gamma: float
+    gamma_rms: float
+    impulsive: bool
+    n_unf: int
+    reorder: bool
+    Fw: np.ndarray
+    topo_w: Any
+    pf: Any
+    inv: Any
+    Vw: np.ndarray
+    Vd: np.ndarray
+    Vi: Any
+    opts_kw: dict
+    force: Any
+    flat: Any
+    anchor: Any
+    sup: Any
+    sup_v: Any
+    r1: Any
+    r1_V: Any
+    info: dict
+    auto_robust: bool
+    auto_inner: bool
+    robust_iters: int
+    probe: bool
+    presmoothed: bool
+    mesh_key: str = ""
+    presmooth: dict | None = None
+    first_probe: Any = None
+
+
+def mesh_key(V: np.ndarray, F: np.ndarray) -> str:
+    """A digest of the arrays a plan reads: a plan runs only on the mesh it was made from."""
+    import hashlib
+
+    h = hashlib.blake2b(digest_size=16)
+    h.update(np.ascontiguousarray(V, dtype=np.float64).tobytes())
+    h.update(np.ascontiguousarray(F, dtype=np.int64).tobytes())
+    return h.hexdigest()
