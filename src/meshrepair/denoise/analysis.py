@@ -187,7 +187,7 @@ def _plan_one(V, F, *, lam, th, a, robust_iters, feature_iters, mask_update_ever
                                    Vd, Vi, q_edges, th)
 
         r1 = run_probe(kw1) if probe_result is None else probe_result
-        first_probe = r1
+        first_probe = r1  # the one probe of the call, shared by both noise models' plans
         tr = tangential_ratio(Vt_w, Fw, r1.V, topo=topo_w)
         ns = noise_scale(Vn_w, Fw, reference=r1.V, topo=topo_w)
         if willmore_weight is None:
@@ -202,13 +202,9 @@ def _plan_one(V, F, *, lam, th, a, robust_iters, feature_iters, mask_update_ever
                             is not None else rule, {"rho": ns.rho, "tangential_ratio": tr,
                                                     "impulsive": float(impulsive)},
                             willmore_weight is not None))
-        if auto_inner and ww > 1.0:  # correlated noise: more V-steps for its long waves,
-            inner_iters = inner_iters_from_scale(ns.length)  # in the probe too (its creases)
+        if auto_inner and ww > 1.0:  # correlated noise: more V-steps for its long waves
+            inner_iters = inner_iters_from_scale(ns.length)  # (the probe is not run again)
             opts_kw["inner_iters"] = inner_iters
-            if inner_iters != kw1["inner_iters"]:
-                kw1["inner_iters"] = inner_iters
-                r1 = run_probe(kw1)
-                tr = tangential_ratio(Vt_w, Fw, r1.V, topo=topo_w)
         r1_V = r1.V[inv] if reorder else r1.V
         cs = getattr(r1, "crease_support", None)  # the gate's read on these normals
         sup, net = cs if cs is not None else _cn.supported(topo_w, r1.N, th=th)

@@ -47,7 +47,7 @@ resolution, :mod:`meshrepair.denoise.coarse_lowpass`, read from the relief,
 
 Throughout: λ = ``clip(0.02 / γ̂², 0.05, 1)``; the Willmore weight ``w`` from ρ for correlated
 noise along the normals (:func:`willmore_weight_from_scale`) and then ``3 max(1, ℓ²)`` V-steps
-per iteration for its correlation length ℓ, the probe included (:func:`inner_iters_from_scale`);
+per iteration of the main solve for its correlation length ℓ (:func:`inner_iters_from_scale`);
 a Huber fidelity for impulsive noise (:mod:`meshrepair.model.fidelity`); a tangential anchor on C
 when the noise lies along the normals (r_t < 0.65). All parameters are in mean-edge-length
 units, so the result is equivariant under rotation, translation and uniform scaling.
