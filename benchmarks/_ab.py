@@ -54,7 +54,7 @@ if __name__ == "__main__":
         return r
 
     solver.ADMMSolver.solve = timed_solve
-    orig_resume = getattr(solver.ADMMSolver, "resume", None)  # round 11u: a resumed run
+    orig_resume = getattr(solver.ADMMSolver, "resume", None)  # a resumed run
 
     def timed_resume(self, state, **kw):
         t, k1 = time.perf_counter(), state.k

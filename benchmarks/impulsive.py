@@ -1,5 +1,5 @@
 """Synthetic impulsive noise on the shared meshes, the main run started from the input vs from
-the robust probe (docs/parameters.md, round 8: ``denoise_rules.warm_start_from_probe``).
+the robust probe (docs/parameters.md: ``rules.warm_start_from_probe``).
 
 Noise: 0.1 l Gaussian noise along the vertex normals on every vertex, then a fraction of the
 vertices (10 % or 20 %) thrown along their normals by 1.0 l or 0.6 l times a standard normal

@@ -1,5 +1,5 @@
 """Synthetic Kinect-like (spatially correlated) noise on the shared meshes: the defaults with
-and without the crease sharpening of round 9k (``denoise_rules.SHARPEN``,
+and without the crease sharpening (``rules.SHARPEN``,
 :mod:`meshrepair.denoise.modes`).
 
 Noise: ``meshrepair.denoise.scale.correlated_noise`` with m = 3 diffusion steps (ℓ ≈ 1.7 edges) and
@@ -9,8 +9,8 @@ not exercise the rule. Prints one markdown row per mesh::
 
     python benchmarks/kinect_like.py
 
-``--decision`` compares round 9k's decision (``ρ_S > 1/2`` alone,
-``denoise_rules.SHARPEN_FLAT_SUPPORT = False``) with round 11k's (the flat support,
+``--decision`` compares the sharpening decision on ``ρ_S > 1/2`` alone
+(``rules.SHARPEN_FLAT_SUPPORT = False``) with the default one (the flat support,
 :mod:`meshrepair.denoise.sharpen_decision`) instead of the step off / on, and prints the largest
 set's
 ``ρ`` and ``φ``; ``--cases mesh:γ:m:seed ...`` replaces the default list (``kinect`` is the
@@ -51,7 +51,7 @@ def main(argv=None) -> None:
 
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--decision", action="store_true",
-                    help="round 9k's decision against round 11k's (instead of off / on)")
+                    help="the decision on rho_S alone against the default (not off / on)")
     ap.add_argument("--cases", nargs="+", default=list(MESHES))
     args = ap.parse_args(argv)
     rules = importlib.import_module("meshrepair.denoise.rules")
@@ -59,9 +59,9 @@ def main(argv=None) -> None:
     info = C.machine_info()
     print(f"machine: {info}\n")
     if args.decision:
-        print("| case | w | round 9k decision MSAE / E_a (kept) | round 11k (kept) | change "
+        print("| case | w | ρ_S alone: MSAE / E_a (kept) | default (kept) | change "
               "| ρ | φ "
-              "| time 9k / 11k |")
+              "| time ρ_S alone / default |")
         print("|---|---:|---|---|---:|---:|---:|---:|")
     else:
         print("| mesh | w | ℓ | without sharpening MSAE / E_a | with (default) | change | kept | "

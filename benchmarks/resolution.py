@@ -1,4 +1,4 @@
-"""The same surface at another resolution must get the same treatment (issue 12, round 11r).
+"""The same surface at another resolution must get the same treatment (issue 12).
 
 For shared truths (organic: spot, bunny, nicolo, rocker_arm, camelhead; CAD: fandisk, twelve,
 sharp_sphere, trim_star, screwdriver) the script builds versions at other resolutions
@@ -13,9 +13,9 @@ sharp_sphere, trim_star, screwdriver) the script builds versions at other resolu
 
 adds noise (32) (``meshrepair.add_noise``, σ = γ × the *new* mean edge length, seed 0) at γ 0.1 /
 0.3 / 0.5, along the normals and in random directions, and prints one row per input: the branch
-the defaults take (``class``: organic or CAD, i.e. whether the outside weight of round 4
+the defaults take (``class``: organic or CAD, i.e. whether the outside weight
 fired; the crease-supported fraction; the noise read γ̂; impulsive; the discrepancy re-solve;
-the low-pass of the input of round 10h), MSAE / E_V against the (re-sampled) truth, the time of
+the coarse-to-fine low-pass of the input), MSAE / E_V against the (re-sampled) truth, the time of
 ``denoise``, and the in-house Taubin at its defaults (:func:`meshrepair.baselines.taubin_smooth`)
 as a floor. A row is *flipped* when its class differs from the same mesh and noise at ``x1``.
 

@@ -1,13 +1,13 @@
 """What the crease network of the probe reads on the rows of ``benchmarks/resolution.py``
-(issue 12, round 11w): why a coarse noisy organic mesh passes the CAD test.
+(issue 12): why a coarse noisy organic mesh passes the CAD test.
 
 For each row (mesh, level, noise of ``resolution.py``'s default grid, same cached inputs) the
 defaults run up to the crease-support read of the probe (the normals ``N¹`` handed to
 :func:`meshrepair.denoise.crease_network.supported`, captured there; the run stops at that point),
 and
 the script prints: the radius ``q`` of the noisy input and of the probe in mean edge lengths,
-γ̂, the supported fraction, round 11d's network branching β and side spread s, and per kept
-chain (longest first) its length, β_c, s_c, round 7's persistence ratio p, the straightness
+γ̂, the supported fraction, the crease network's branching β and side spread s, and per kept
+chain (longest first) its length, β_c, s_c, the persistence ratio p, the straightness
 (median chord over path length between chain vertices 4 chain edges apart, on the input), the
 median probe dihedral and the share of its edges whose *truth* dihedral exceeds 20°; then the
 share of interior edges whose probe dihedral lies in [8°, 30°) and above 30°, and the same on the

@@ -1,4 +1,4 @@
-"""Seed robustness of the denoising defaults (issue 12, round 10s).
+"""Seed robustness of the denoising defaults (issue 12).
 
 ``denoise(V, F)`` at its defaults on ``add_noise(V, F, γ, direction=d, seed=s)`` of the shared
 clean meshes, for every γ, direction and seed: one row per (mesh, γ, direction) with the MSAE
