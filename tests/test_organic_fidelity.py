@@ -15,24 +15,26 @@ from meshrepair.denoise.rules import CAD_SUPPORT, TANGENTIAL_MAX, lambda_from_no
 from .conftest import shared_mesh
 
 
-def test_lambda_equals_the_default_above_the_cap_and_continues_it_below():
-    """For noise along the normals λ = 0.02/γ̂² is the default law without its cap at 1: equal
-    to :func:`lambda_from_noise` for γ̂ ≥ √0.02, above it (and continuous) below, capped at
-    λ_max; the tangential constant doubles it; monotone non-increasing in γ̂."""
+def test_lambda_is_the_default_law_and_capped_only_on_low_passed_data():
+    """For noise along the normals λ = max(0.02/γ̂², 0.05) is :func:`lambda_from_noise`; the
+    tangential constant doubles it; on a low-passed input (``graded=False``) it is at most
+    LOWPASSED_LAMBDA_MAX; monotone non-increasing in γ̂."""
     g1 = np.sqrt(of.LAMBDA_SCALE)
-    for g in (g1, 0.2, 0.3, 0.5, 1.0):
+    for g in (0.01, 0.05, 0.1, g1, 0.2, 0.3, 0.5, 1.0, 0.0, float("nan")):
         assert of.organic_lambda(g) == pytest.approx(lambda_from_noise(g))
-    assert of.organic_lambda(g1 * (1 - 1e-9)) == pytest.approx(1.0)
+    assert of.organic_lambda(g1) == pytest.approx(1.0)
     assert of.organic_lambda(0.1) == pytest.approx(2.0)
     assert of.organic_lambda(0.1, TANGENTIAL_MAX) == pytest.approx(4.0)
     assert of.organic_lambda(0.1, TANGENTIAL_MAX - 1e-9) == pytest.approx(2.0)
-    assert of.organic_lambda(0.01) == of.LAMBDA_MAX
-    assert of.organic_lambda(0.0) == of.LAMBDA_MAX
-    assert of.organic_lambda(float("nan")) == of.LAMBDA_MAX
+    assert of.organic_lambda(0.01) == pytest.approx(200.0)
+    assert of.organic_lambda(0.01, graded=False) == of.LOWPASSED_LAMBDA_MAX
+    assert of.organic_lambda(float("nan"), graded=False) == of.LOWPASSED_LAMBDA_MAX
+    assert lambda_from_noise(0.01, lowpassed=True) == 1.0
     assert of.organic_lambda(10.0) == pytest.approx(0.05)
     gs = np.linspace(0.02, 1.0, 200)
-    lam = np.array([of.organic_lambda(g, 1.0) for g in gs])
-    assert np.all(np.diff(lam) <= 1e-12)
+    for kw in ({}, {"graded": False}):
+        lam = np.array([of.organic_lambda(g, 1.0, **kw) for g in gs])
+        assert np.all(np.diff(lam) <= 1e-12)
 
 
 def test_inverse_variance_weight_is_the_wiener_optimum():
@@ -79,7 +81,7 @@ def test_gates():
 
 def test_defaults_use_the_rule_and_it_is_scale_free():
     """On a smooth sphere with low white noise along the normals the main run's λ is the
-    rule's, above the capped default, and the same when the mesh is scaled (γ̂ is in mean edge
+    rule's, above 1, and the same when the mesh is scaled (γ̂ is in mean edge
     lengths)."""
     s = trimesh.creation.icosphere(subdivisions=3, radius=1.0)
     V, F = np.asarray(s.vertices, float), np.asarray(s.faces, np.int64)

@@ -31,20 +31,21 @@ def test_gain_is_one_up_to_ratio_one_then_grows_as_its_square():
     assert np.all(np.diff(g) >= 0)
 
 
-def test_graded_law_is_the_round_10l_law_times_the_gain():
-    """λ_graded(γ̂, r_t) = clip(g c/γ̂², 0.05, g λ_max) with c, λ_max of round 10l: equal to the
-    ungraded law wherever g = 1 (normal noise, r_t ≤ 1), g times it where neither clip is
-    active, and the cap scales with g too."""
-    for g in np.linspace(0.03, 1.2, 60):
+def test_graded_law_is_the_ungraded_law_times_the_gain():
+    """λ_graded(γ̂, r_t) = max(g c/γ̂², 0.05): equal to the ungraded law wherever g = 1 (normal
+    noise, r_t ≤ 1) and the low-passed cap is not reached, g times it where neither bound is
+    active, uncapped; the ungraded law (the run on a low-passed input) is capped at
+    LOWPASSED_LAMBDA_MAX."""
+    for g in np.linspace(0.075, 1.2, 60):
         for r in (0.2, 0.7, 1.0):
             assert of.organic_lambda(g, r) == pytest.approx(of.organic_lambda(g, r, graded=False))
     r = 1.85
     gain = 0.5 * (1 + r * r)
-    for g in (0.075, 0.1, 0.2):  # 0.04/γ̂² between 0.05 and 8: no clip
+    for g in (0.01, 0.075, 0.1, 0.2):
         assert of.organic_lambda(g, r) == pytest.approx(gain * 0.04 / g ** 2)
-    assert of.organic_lambda(0.01, r) == pytest.approx(gain * of.LAMBDA_MAX)
-    assert of.organic_lambda(float("nan"), r) == pytest.approx(gain * of.LAMBDA_MAX)
-    assert of.organic_lambda(0.065, r, graded=False) == pytest.approx(of.LAMBDA_MAX)
+    assert of.organic_lambda(float("nan"), r) == pytest.approx(gain * 0.04 / 1e-3 ** 2)
+    assert of.organic_lambda(0.065, r, graded=False) == pytest.approx(of.LOWPASSED_LAMBDA_MAX)
+    assert of.organic_lambda(0.01, 0.2, graded=False) == pytest.approx(of.LOWPASSED_LAMBDA_MAX)
 
 
 @pytest.mark.parametrize("ratio", [0.5, 1.0, 2.0])
@@ -71,7 +72,7 @@ def test_nicolo_low_random_noise_beats_the_tuned_and_default_peers():
     V0 = add_noise(V, F, 0.1, direction="random", seed=1)
     r = denoise(V0, F)
     assert r.params["tangential_ratio"] > 1.0
-    assert r.params["lam"] > of.LAMBDA_MAX
+    assert r.params["lam"] > of.LOWPASSED_LAMBDA_MAX
     assert msae(r.V, V, F) < 0.98 * 35.8
 
 
@@ -87,7 +88,7 @@ def test_reanchoring_reads_the_residual_at_the_ungraded_weight():
     assert info["lambda_gain"] == pytest.approx(of.tangential_gain(1.85))
     assert lam == pytest.approx(of.organic_lambda(0.065, 1.85))
     lam0 = of.main_lambda(0.065, 1.85, info, graded=False)
-    assert info["lambda_gain"] == 1.0 and lam0 == pytest.approx(of.LAMBDA_MAX)
+    assert info["lambda_gain"] == 1.0 and lam0 == pytest.approx(of.LOWPASSED_LAMBDA_MAX)
 
 
 @pytest.mark.shared

@@ -104,7 +104,7 @@ def _plan_one(V, F, *, lam, th, a, robust_iters, feature_iters, mask_update_ever
     Vr = V if read_from is None else read_from  # the readings' vertices
     gamma, gamma_rms = noise_statistics(Vr, F, topo)
     impulsive = is_impulsive(gamma, gamma_rms)
-    lam_used = lambda_from_noise(gamma) if lam is None else float(lam)
+    lam_used = lambda_from_noise(gamma, lowpassed=presmoothed) if lam is None else float(lam)
     delta = huber_from_noise(gamma, gamma_rms) if huber_delta is None else float(huber_delta)
     rule = (f"huber_from_noise: 2 γ̂_rms when γ̂_rms > {IMPULSIVE_RATIO:g} γ̂ (impulsive), "
             "else 0")
@@ -167,7 +167,8 @@ def _plan_one(V, F, *, lam, th, a, robust_iters, feature_iters, mask_update_ever
     sup_v = None  # vertices of the crease-supported region, input order
     w_out = 1.0
     ww = 1.0 if willmore_weight is None else float(willmore_weight)
-    rule_lam = "lambda_from_noise: clip(0.02 / γ̂², 0.05, 1)"
+    rule_lam = "lambda_from_noise: max(0.02 / γ̂², 0.05)" + (
+        ", at most 1 (low-passed data)" if presmoothed else "")
     if probe and stages[0].max_iter > 0:
         n1 = int(min(stages[0].max_iter, PROBE_MAX_ITERS))
         st1 = replace(stages[0], max_iter=n1, min_iter=min(stages[0].min_iter, n1))
@@ -228,7 +229,7 @@ def _plan_one(V, F, *, lam, th, a, robust_iters, feature_iters, mask_update_ever
         if n_unf and Vd is Vw and not unfolded_data_after_probe(impulsive, tr, sf):
             Vd, Vi = Vn_w, Vw  # noise with a tangential part: the input is the main run's data
         if lam is None and ww > 1.0:  # correlated noise: λ from its level at its own scale
-            lam_used = lambda_from_noise(max(gamma, ns.gamma))
+            lam_used = lambda_from_noise(max(gamma, ns.gamma), lowpassed=presmoothed)
             opts_kw["lam"] = lam_used
             rule_lam = "lambda_from_noise at the noise's own scale: max(γ̂, γ̂_scale)"
         w_out = outside_weight(sf, tr) if willmore_weight is None else 1.0

@@ -45,7 +45,7 @@ resolution, :mod:`meshrepair.denoise.coarse_lowpass`, read from the relief,
 :mod:`meshrepair.denoise.lengthcheck`; the input's vertex layout kept,
 :mod:`meshrepair.denoise.layoutkeep`), then the whole schedule runs on the low-passed mesh.
 
-Throughout: λ = ``clip(0.02 / γ̂², 0.05, 1)``; the Willmore weight ``w`` from ρ for correlated
+Throughout: λ = ``max(0.02 / γ̂², 0.05)``; the Willmore weight ``w`` from ρ for correlated
 noise along the normals (:func:`willmore_weight_from_scale`) and then ``3 max(1, ℓ²)`` V-steps
 per iteration of the main solve for its correlation length ℓ (:func:`inner_iters_from_scale`);
 a Huber fidelity for impulsive noise (:mod:`meshrepair.model.fidelity`); a tangential anchor on C

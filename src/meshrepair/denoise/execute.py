@@ -133,7 +133,8 @@ def _execute(plan: DenoisePlan, V, F, callback=None) -> DenoiseResult:
         info["start_from_probe"] = False
         info["collapse_fallback"] = True
         ww = 1.0 if o["willmore_weight"] is None else float(o["willmore_weight"])
-        lam_used = lambda_from_noise(gamma) if o["lam"] is None else float(o["lam"])
+        lam_used = (lambda_from_noise(gamma, lowpassed=st.presmoothed) if o["lam"] is None
+                    else float(o["lam"]))
         opts_kw["lam"] = lam_used
         stages = default_stages(robust_iters=0, feature_iters=int(o["feature_iters"]),
                                 a=o["a"], flat_a=FLAT_A if o["regions"] else 0.0,

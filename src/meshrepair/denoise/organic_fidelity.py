@@ -2,23 +2,21 @@
 .
 
 **Fidelity weight.** The default weight of the data term of energy (6),
-:func:`meshrepair.denoise.rules.lambda_from_noise`, is ``λ = clip(0.02 / γ̂², 0.05, 1)``. The
+:func:`meshrepair.denoise.rules.lambda_from_noise`, is ``λ = max(0.02 / γ̂², 0.05)``: the
 term ``(λ/2)‖V − V⁰‖²`` is the negative log-likelihood of white Gaussian noise of level ``γ̂``
 (mean edge lengths) up to the prior's scale, so the weight grows as ``1/γ̂²`` (for a quadratic
 prior and a signal whose spectrum is the prior's inverse, ``λ = c/σ²`` is exactly the Wiener
-filter: tests/test_organic_fidelity.py); the upper cap ``λ ≤ 1`` (reached at ``γ̂ ≈ 0.14``)
-suits CAD parts. On a smooth organic surface at low noise the capped weight lets the
-edge-Willmore prior flatten relief the noise did not hide. On meshes that are not CAD parts
+filter: tests/test_organic_fidelity.py). On meshes that are not CAD parts
 (crease support below :data:`meshrepair.denoise.rules.CAD_SUPPORT` of the edges), with white
 (Willmore weight 1 and correlation ratio ``ρ <`` :data:`RHO_WHITE`), non-impulsive noise, the
-main run uses the law without the cap,
+main run uses the law graded by the noise's direction,
 
-.. math:: λ = \\mathrm{clip}(c / γ̂^2,\\; 0.05,\\; λ_{max}), \\qquad λ_{max} = 8, \\qquad
+.. math:: λ = \\max(c / γ̂^2,\\; 0.05), \\qquad
           c = \\begin{cases} 0.02 & r_t < 0.65 \\\\ 0.04 & r_t \\ge 0.65, \\end{cases}
 
-(:func:`organic_lambda`), which for noise along the normals equals the default where
-``γ̂ ≥ 0.1414``. ``γ̂`` is a level of the offsets *along the normals*; noise with a tangential
-part (``r_t ≥`` :data:`meshrepair.denoise.rules.TANGENTIAL_MAX`,
+(:func:`organic_lambda`), which for noise along the normals is the default. ``γ̂`` is a
+level of the offsets *along the normals*; noise with a tangential part
+(``r_t ≥`` :data:`meshrepair.denoise.rules.TANGENTIAL_MAX`,
 :func:`meshrepair.denoise.scale.tangential_ratio`) puts part of its variance where the prior does
 not act (the tangential layout), so the normal level under-reads the noise the data term
 sees; the constant doubles there (``c = 0.04``, chosen on the benchmark grid). The robust probe
@@ -38,15 +36,15 @@ the input's own irregular layout (up to 1.9-2.3) and its curvature leak into the
 estimate ``γ̂``, which then over-reads the noise that the prior must remove, so the data weight
 grows with ``r_t`` there. The law of the main run, for ``r_t ≥ 0.65``,
 
-.. math:: λ = \\mathrm{clip}\\bigl(g\\, c / γ̂^2,\\; 0.05,\\; g\\, λ_{max}\\bigr), \\qquad
+.. math:: λ = \\max\\bigl(g\\, c / γ̂^2,\\; 0.05\\bigr), \\qquad
           g(r_t) = \\tfrac12 \\bigl(1 + \\max(r_t, 1)^2\\bigr),
 
-is the ungraded law for ``r_t ≤ 1`` (``g = 1``) and multiplies its constant and its cap by
+is the ungraded law for ``r_t ≤ 1`` (``g = 1``) and multiplies its constant by
 ``(1 + r_t²)/2`` above (``g c = 0.02 (1 + r_t²)``: the normal constant times the ratio of the
 total to the normal part of the residual as ``r_t`` measures them), for ``r_t`` up to
 :data:`GAIN_RATIO_MAX` = 2.5 (above it ``g = 1``: not a measurement). The run on a low-passed
-input (:mod:`meshrepair.denoise.presmooth`) keeps ``g = 1``: its ``r_t`` reads the filter's residue,
-not the input's noise.
+input (:mod:`meshrepair.denoise.presmooth`) keeps ``g = 1`` and caps λ at
+:data:`LOWPASSED_LAMBDA_MAX`: its ``r_t`` reads the filter's residue, not the input's noise.
 
 **Input layout.** The re-integration from the input of :mod:`meshrepair.denoise.organic` restarts
 from
@@ -68,7 +66,9 @@ import numpy as np
 ORGANIC_FIDELITY = True
 LAMBDA_SCALE = 0.02
 LAMBDA_SCALE_TANGENTIAL = 0.04
-LAMBDA_MAX = 8.0
+LOWPASSED_LAMBDA_MAX = 8.0
+"""Largest λ of this law on a low-passed input (the coarse-to-fine run): the residual
+roughness γ̂ read there measures the noise left, not the filter's bias."""
 RHO_WHITE = 1.4
 GAIN_RATIO_MAX = 2.5
 """Largest ``r_t`` :func:`tangential_gain` trusts: random-direction noise on the benchmark
@@ -77,25 +77,23 @@ tetrahedron, with no vertex two rings inside, reads 18.6, and a gain there would
 collapsed result) and the gain is 1."""
 
 
-def organic_lambda(gamma: float, tangential: float = 0.0, *,
-                   lam_max: float | None = None, graded: bool = True) -> float:
-    """``λ = clip(c / γ̂², 0.05, λ_max)`` (module docstring); ``γ̂`` in mean edge lengths,
-    ``c = 0.02`` for noise along the normals (``r_t < 0.65``), ``c = 0.04`` otherwise.
+def organic_lambda(gamma: float, tangential: float = 0.0, *, graded: bool = True) -> float:
+    """``λ = max(g c / max(γ̂, γ_0)², 0.05)`` (module docstring); ``γ̂`` in mean edge lengths,
+    ``γ_0`` = :data:`meshrepair.denoise.rules.GAMMA_FLOOR`, ``c = 0.02`` for noise along the
+    normals (``r_t < 0.65``), ``c = 0.04`` otherwise.
 
-    ``graded`` (:func:`tangential_gain`): for ``r_t ≥ 0.65`` both ``c`` and
-    ``λ_max`` are multiplied by ``g(r_t) = (1 + max(r_t, 1)²) / 2`` (1 for ``r_t ≤ 1``: the
-    ungraded law there). The run on a low-passed input
-    (:mod:`meshrepair.denoise.presmooth`) passes ``graded=False``: its ``r_t`` reads the filter's
-    residue, not the input's noise. A non-finite or non-positive ``γ̂`` (a clean mesh)
-    returns ``λ_max`` (times ``g``)."""
-    from meshrepair.denoise.rules import TANGENTIAL_MAX
+    ``graded`` (:func:`tangential_gain`): for ``r_t ≥ 0.65`` ``c`` is multiplied by
+    ``g(r_t) = (1 + max(r_t, 1)²) / 2`` (1 for ``r_t ≤ 1``: the ungraded law there). The run on
+    a low-passed input (:mod:`meshrepair.denoise.presmooth`) passes ``graded=False``: its
+    ``r_t`` reads the filter's residue, not the input's noise, and its γ̂ under-reads the
+    data's error, so ``g = 1`` and ``λ ≤`` :data:`LOWPASSED_LAMBDA_MAX`."""
+    from meshrepair.denoise.rules import GAMMA_FLOOR, TANGENTIAL_MAX
 
     g = tangential_gain(tangential) if graded else 1.0
-    cap = (LAMBDA_MAX if lam_max is None else float(lam_max)) * g
-    if not np.isfinite(gamma) or gamma <= 0:
-        return cap
+    gam = max(float(gamma), GAMMA_FLOOR) if np.isfinite(gamma) else GAMMA_FLOOR
     c = LAMBDA_SCALE if tangential < TANGENTIAL_MAX else LAMBDA_SCALE_TANGENTIAL
-    return float(np.clip(g * c / float(gamma) ** 2, 0.05, cap))
+    lam = max(g * c / gam ** 2, 0.05)
+    return float(lam if graded else min(lam, LOWPASSED_LAMBDA_MAX))
 
 
 def tangential_gain(tangential: float) -> float:

@@ -13,7 +13,34 @@ from __future__ import annotations
 
 import numpy as np
 
-from meshrepair.model.schedule import lambda_from_noise  # noqa: F401  (a default of the model)
+LAMBDA_SCALE = 0.02
+"""``c`` of ``λ = c / γ̂²``: the fidelity weight per squared mean edge length at unit noise."""
+LAMBDA_MIN = 0.05
+"""Smallest default λ: heavy noise still ties the result to its data."""
+GAMMA_FLOOR = 1e-3
+"""Noise level (mean edge lengths) below which γ̂ reads as this floor (a clean input)."""
+
+
+LOWPASSED_LAMBDA_MAX = 1.0
+"""Largest default λ of the run on a low-passed input (coarse-to-fine,
+:mod:`meshrepair.denoise.presmooth`): its data's error against the surface is the filter's bias
+plus the noise left, and the residual roughness γ̂ read on it measures only the latter."""
+
+
+def lambda_from_noise(gamma: float, *, lowpassed: bool = False) -> float:
+    """Default fidelity weight λ of (6): ``λ = max(c / max(γ̂, γ_0)², λ_min)``.
+
+    The data term ``(λ/2)‖V − V⁰‖²`` is the negative log-likelihood of white Gaussian noise of
+    level ``γ̂`` (mean edge lengths) up to the prior's scale, so the MAP weight grows as
+    ``1/γ̂²``: low noise ties the result closely to its data, and a surface at low noise keeps
+    the relief the prior would flatten. The floor ``λ_min`` keeps heavy noise tied to its data.
+    On a low-passed input (``lowpassed``) γ̂ under-reads the data's error and λ is at most
+    :data:`LOWPASSED_LAMBDA_MAX`. (The hole filler and the completion use the model's default
+    :func:`meshrepair.model.schedule.lambda_from_noise`, capped at 1: their data are the
+    patch's surround, not a noisy measurement.)"""
+    g = max(float(gamma), GAMMA_FLOOR) if np.isfinite(gamma) else GAMMA_FLOOR
+    lam = max(LAMBDA_SCALE / g ** 2, LAMBDA_MIN)
+    return min(lam, LOWPASSED_LAMBDA_MAX) if lowpassed else lam
 
 HEAVY_NOISE = 0.33
 HEAVY_SLOPE = 600.0
