@@ -1,5 +1,5 @@
-"""The data weight graded by the tangential ratio of the noise (round 11n,
-:func:`meshrepair.denoise.organic_fidelity.tangential_gain`)."""
+"""The data weight graded by the tangential ratio of the noise
+(:func:`meshrepair.denoise.organic_fidelity.tangential_gain`)."""
 
 from __future__ import annotations
 
@@ -32,7 +32,7 @@ def test_gain_is_one_up_to_ratio_one_then_grows_as_its_square():
 
 
 def test_graded_law_is_the_round_10l_law_times_the_gain():
-    """λ_graded(γ̂, r_t) = clip(g c/γ̂², 0.05, g λ_max) with c, λ_max of round 10l: equal to the
+    """λ_graded(γ̂, r_t) = clip(g c/γ̂², 0.05, g λ_max) with the ungraded law's c, λ_max: equal to the
     ungraded law wherever g = 1 (normal noise, r_t ≤ 1), g times it where neither clip is
     active, and the cap scales with g too."""
     for g in np.linspace(0.03, 1.2, 60):
@@ -92,7 +92,7 @@ def test_reanchoring_reads_the_residual_at_the_ungraded_weight():
 
 @pytest.mark.shared
 def test_a_graded_weight_does_not_switch_the_reanchoring_on():
-    """nicolo γ0.2 random, seed 5: at round 10l's weight the residual reads ρ_t 0.626 (not
+    """nicolo γ0.2 random, seed 5: at the ungraded weight the residual reads ρ_t 0.626 (not
     re-anchored, MSAE 52.8); the graded weight (g 1.34) shrinks it to 0.550, and re-anchoring
     there measured 59.0. Read at the ungraded weight it stays off: measured 51.6."""
     V, F = shared_mesh("nicolo.ply")
