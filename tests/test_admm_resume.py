@@ -1,7 +1,8 @@
-"""Round 11u: a run stopped by rule (35) at ``τ_1`` and resumed from its
+"""A run stopped by rule (35) at ``τ_1`` and resumed from its
 :class:`~meshrepair.model.solver.state.ADMMState` at ``τ_2 < τ_1`` is the same run as one solve at
-``τ_2`` (the stop only reads ``rel``; :mod:`meshrepair.model.solver.state`), and round 11s's gated
-probe with its gate forced open equals round 11r's one-phase probe."""
+``τ_2`` (the stop only reads ``rel``; :mod:`meshrepair.model.solver.state`), and the two-phase
+gated probe (:func:`meshrepair.denoise.scalefree.gated_probe`) with its gate forced open equals
+the one-phase probe."""
 
 from dataclasses import replace
 
@@ -65,8 +66,8 @@ def test_resume_across_stages_and_mask_updates():
 
 
 def test_restart_is_not_the_same_run():
-    """What round 11s did (a new solve from phase 1's vertices) differs from the one run:
-    the multipliers and the normalisation start again."""
+    """A restart (a new solve from phase 1's vertices) is not the one run: the multipliers and
+    the normalisation start again, so the result differs; phase 2 resumes instead."""
     V, F = _noisy_box()
     st = _probe_stage()
     S = ADMMSolver(F, len(V), options=SolverOptions(stages=(st,), tol=2e-3))

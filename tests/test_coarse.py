@@ -1,5 +1,5 @@
 """The longer low-pass where the surface is smooth at the mesh's resolution
-(:mod:`meshrepair.denoise.coarse`, round 11c)."""
+(:mod:`meshrepair.denoise.coarse`)."""
 
 from __future__ import annotations
 
@@ -69,7 +69,7 @@ def test_steps_rule_and_gate():
     assert co.coarse_steps(0.27, 0.15, **kw) == round((0.27 / co.GAMMA_C) ** 2)
     assert co.coarse_steps(0.12, 0.15, **kw) == 4
     assert co.coarse_steps(0.5, 0.15, **kw) == co.MAX_STEPS
-    assert co.coarse_steps(0.03, 0.15, **kw) == 0  # a low-passed input (round 10h)
+    assert co.coarse_steps(0.03, 0.15, **kw) == 0  # an input low-passed by presmooth
     assert co.coarse_steps(0.27, co.C_0, **kw) == 0  # relief at the mesh's scale
     assert co.coarse_steps(0.27, float("nan"), **kw) == 0
     assert co.coarse_steps(0.27, 0.15, **{**kw, "impulsive": True}) == 0

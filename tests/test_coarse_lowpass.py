@@ -1,4 +1,5 @@
-"""Round 11w: the low-pass length of round 10h capped at the mesh's resolution."""
+"""The length of the input low-pass (:mod:`meshrepair.denoise.presmooth`) capped at the mesh's
+resolution (:mod:`meshrepair.denoise.coarse_lowpass`)."""
 
 import numpy as np
 import pytest
@@ -79,7 +80,8 @@ def _bumpy_sphere(freq=8.0, amp=0.2):
 
 
 def _low_pass_read(monkeypatch, Vn, F):
-    """(steps asked by round 10h, K_q, probe roughness, steps taken) of denoise on (Vn, F)."""
+    """(steps the presmooth rule asks, K_q, probe roughness, steps taken) of denoise on
+    (Vn, F)."""
     from meshrepair import denoise
     from meshrepair.denoise.coarse import curvature_roughness
 
@@ -99,9 +101,9 @@ def _low_pass_read(monkeypatch, Vn, F):
 
 
 def test_denoise_caps_the_low_pass_where_the_coarse_surface_has_relief(monkeypatch):
-    # heavy noise on a coarse organic mesh: round 10h's low-pass fires; with relief at the
+    # heavy noise on a coarse organic mesh: the input low-pass fires; with relief at the
     # mesh's scale (probe roughness ≥ C_0) its length is K_q, on a plain sphere (no relief) it
-    # is round 10h's, however coarse the mesh
+    # is the uncapped presmooth length, however coarse the mesh
     from meshrepair import add_noise
     from meshrepair.denoise.coarse import C_0
 
@@ -123,7 +125,7 @@ def test_run_on_the_low_passed_mesh_keeps_the_white_read(monkeypatch):
 
 
 def test_short_low_pass_leaves_noise_that_reads_correlated_but_is_kept_white(monkeypatch):
-    # a coarse noisy sphere low-passed by 2 pairs (the cap shortened round 10h's length): the
+    # a coarse noisy sphere low-passed by 2 pairs (the cap shortened the presmooth length): the
     # run on it reads the filter's left-over as correlated (w > 1) unless the white read is kept
     from meshrepair import add_noise, denoise
 

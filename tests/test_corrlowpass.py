@@ -1,5 +1,5 @@
 """The low-pass at the noise's scale for correlated noise on organic meshes
-(:mod:`meshrepair.denoise.corrlowpass`, round 11q)."""
+(:mod:`meshrepair.denoise.corrlowpass`)."""
 
 from __future__ import annotations
 
@@ -71,9 +71,10 @@ def test_white_noise_does_not_fire(gamma, direction):
 
 @pytest.mark.shared
 def test_organic_correlated_noise_design_rows(monkeypatch):
-    """Design rows of docs/parameters.md round 11q: nicolo and pierrot (truth of the published
-    triple) with correlated noise m = 4, γ = 0.5, seed 3; measured 357.4 → 324.8 and
-    388.2 → 335.3. The nicolo γ0.2 pair (white noise) does not fire."""
+    """Design rows of the correlated low-pass (docs/parameters.md, corrlowpass.py): nicolo and
+    pierrot (truth of the published triple) with correlated noise m = 4, γ = 0.5, seed 3;
+    measured 357.4 → 324.8 and 388.2 → 335.3. The nicolo γ0.2 pair (white noise) does not
+    fire."""
     from .conftest import shared_mesh
 
     for name, gain in (("nicolo.ply", 0.95), ("published/nllr_pierrot__truth.ply", 0.92)):

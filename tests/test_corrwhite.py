@@ -1,6 +1,5 @@
-"""The band read of correlated noise (:mod:`meshrepair.denoise.corrwhite`, round 11y) and branch 2
-of
-the correlated low-pass gate (:func:`meshrepair.denoise.corrlowpass.white_steps`)."""
+"""The band read of correlated noise (:mod:`meshrepair.denoise.corrwhite`) and branch 2 of the
+correlated low-pass gate (:func:`meshrepair.denoise.corrlowpass.white_steps`)."""
 
 from __future__ import annotations
 
@@ -118,9 +117,9 @@ def test_white_noise_sphere_does_not_fire(direction):
 
 @pytest.mark.shared
 def test_m2_fields_on_shared_organic_meshes(monkeypatch):
-    """Check rows of docs/parameters.md round 11y: m = 2, γ = 0.4, seed 3 on nicolo and the
-    pierrot truth, measured 365.5 → 262.8 and 465.9 → 372.6; the white nicolo γ0.2 pair reads
-    β < β_0 and is not touched."""
+    """Check rows of the band read (docs/parameters.md, corrwhite.py): m = 2, γ = 0.4, seed 3 on
+    nicolo and the pierrot truth, measured 365.5 → 262.8 and 465.9 → 372.6; the white nicolo
+    γ0.2 pair reads β < β_0 and is not touched."""
     from .conftest import shared_mesh
 
     for name, gain in (("nicolo.ply", 0.8), ("published/nllr_pierrot__truth.ply", 0.85)):

@@ -1,6 +1,5 @@
 """Is the probe's crease network a CAD part's creases or noise
-(:mod:`meshrepair.denoise.crease_network`,
-issue 12, round 11d)."""
+(:mod:`meshrepair.denoise.crease_network`)."""
 
 from __future__ import annotations
 
@@ -110,10 +109,11 @@ def test_empty_network_reads_nothing():
 
 def test_spot_under_heavy_normal_noise_is_not_a_cad_part():
     """Bundled spot (2,930 vertices) at γ = 0.4 normal noise: the probe's creases cover ≥ 20 %
-    of the edges (the CAD read before round 11d), but they form a branched network with rough
-    sides, so no crease is supported; the noise is then heavy for this mesh and the input is
-    low-passed first (round 10h). The result beats Taubin's filter at its defaults by far
-    (main before round 11d: 208.9 against Taubin's 202.9)."""
+    of the edges (the support fraction alone would read a CAD part), but they form a branched
+    network with rough sides, so no crease is supported; the noise is then heavy for this mesh
+    and the input is low-passed first (:mod:`meshrepair.denoise.presmooth`). The result beats
+    Taubin's filter at its defaults by far (read as a CAD part it measured 208.9 against
+    Taubin's 202.9)."""
     V, F = bundled_mesh("spot.ply")
     Vn = add_noise(V, F, 0.4, direction="normal", seed=1)
     r = denoise(Vn, F)

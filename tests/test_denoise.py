@@ -233,7 +233,7 @@ def test_direct_and_iterative_backends_agree(spot):
     assert np.abs(a.V - b.V).mean() < 1e-2 * h
     # a face turned over (> 90° from the truth) costs up to 180² deg² of MSAE and whether a
     # handful do is not decided by the solver accuracy (this 20-iteration run: cg 4 faces,
-    # direct 0, with the round-7 crease support of regions.py; 2 / 0 before): at most 0.2 % of
+    # direct 0, with the crease support of regions.py; 2 / 0 without it): at most 0.2 % of
     # the faces, and the MSAE of the others within 5 %
     ta = np.degrees(np.arccos(np.clip(np.einsum("ij,ij->i", face_normals(a.V, F),
                                                 face_normals(V, F)), -1, 1))) > 90

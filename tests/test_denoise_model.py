@@ -85,7 +85,7 @@ def test_noise_scale_on_correlated_noise_of_known_scale(steps):
         assert est.steps <= 1 and abs(est.rho - 1) < 0.1
     else:
         assert abs(est.length - np.sqrt(steps)) <= 0.25 * np.sqrt(steps)
-        # m = 2 reads ρ ≈ 1.03-1.09 like white noise (round 11y: the band read sees it)
+        # m = 2 reads ρ ≈ 1.03-1.09 like white noise (the band read of corrwhite sees it)
         assert est.rho > (1.3 if steps >= 4 else 0.95)
     assert abs(est.gamma - 0.3) <= 0.25 * 0.3
 
@@ -201,7 +201,7 @@ def test_defaults_record_their_decisions():
 def test_unfolded_mesh_is_the_start_and_the_input_the_data(monkeypatch):
     """Normal-direction noise with a fold-over: the unfolded mesh is only the initial iterate,
     the fidelity keeps the input's (exact) tangential positions; impulsive noise keeps the
-    unfolded data (its folds are thrown vertices). Round 11c's finish (a full low-pass on
+    unfolded data (its folds are thrown vertices). The coarse finish (a full low-pass on
     surfaces smooth at the mesh's resolution, which this sphere is) is switched off: it moves
     the layout after the solve, which is what this test measures."""
     from meshrepair import add_noise
@@ -249,7 +249,7 @@ def test_solver_start_differs_from_data():
 def test_quality_published_trim_star_beats_gcn():
     """gcn_trim_star_n3: the defaults beat the published GCN-Denoiser output on MSAE, on the
     mean face-normal angle E_a and on E_V (measured 72.8 vs 174.0, 4.85° vs 5.32°, E_V 0.86×;
-    round 1, with the unfolded mesh as fidelity data: 117.8, 5.74°, 1.27×)."""
+    with the unfolded mesh as fidelity data instead of the input: 117.8, 5.74°, 1.27×)."""
     from meshrepair import vertex_error
 
     Vn, Vt, Vp, F = published_triple("gcn_trim_star_n3")

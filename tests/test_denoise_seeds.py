@@ -1,6 +1,6 @@
-"""Round 10s: noise draws on which the re-integration from the input put back the input's
+"""Noise draws on which the re-integration from the input would put back the input's
 tangential folds (fandisk, γ 0.3, random directions, seeds 4 / 7: MSAE 193.5 / 74.1 where the
-other seeds give 15-28; seed 4 reads non-impulsive and is also kept off by round 10l's
+other seeds give 15-28; seed 4 reads non-impulsive and is also kept off by
 ``organic_fidelity.reintegrate_allowed``, seed 7 reads impulsive and is caught by the fold check
 of ``denoise_folds.reintegration_keeps``). Runs on the bundled fandisk (tests/data), no
 ../shared needed."""
@@ -54,8 +54,8 @@ def test_diagnosis_without_the_check(monkeypatch):
 
 
 def test_reintegration_keeps_truth_table():
-    """The check of round 10s: below the ratio every re-integration is kept, above it only one
-    that folds no more faces than its target."""
+    """The fold check of the re-integration: below the ratio every re-integration is kept, above
+    it only one that folds no more faces than its target."""
     keep = folds_mod.reintegration_keeps
     c = folds_mod.REINTEGRATE_FOLD_CHECK_RATIO
     assert keep(0.18, 81, 10)  # nllr_igea: noise along the normals, the folds are the input's

@@ -1,4 +1,4 @@
-"""The discrepancy test on the outside weight (:mod:`meshrepair.denoise.discrepancy`, round 9s)."""
+"""The discrepancy test on the outside weight (:mod:`meshrepair.denoise.discrepancy`)."""
 
 from __future__ import annotations
 

@@ -1,5 +1,5 @@
-"""Round 9r: the main run's fidelity data once the probe has read the direction of the noise
-(``denoise_folds.unfolded_data_after_probe``; docs/parameters.md, "Round 9r")."""
+"""The main run's fidelity data once the probe has read the direction of the noise
+(``denoise_folds.unfolded_data_after_probe``; docs/parameters.md, folds.py)."""
 
 import numpy as np
 import pytest

@@ -1,5 +1,5 @@
-"""The length of round 10h's low-pass where the surface carries relief at its own scale
-(:mod:`meshrepair.denoise.heavylength`, round 11t)."""
+"""The length of the input low-pass (:mod:`meshrepair.denoise.presmooth`) where the surface
+carries relief at its own scale (:mod:`meshrepair.denoise.heavylength`)."""
 
 from __future__ import annotations
 
@@ -29,7 +29,7 @@ def _sphere(bumps: float = 0.0, freq: float = 12.0):
 
 def test_weight_ramp_maths():
     """w(c) = clip((c_1 − c)/(c_1 − c_0), 0, 1): 1 up to c_0, 0 from c_1, linear between,
-    non-increasing; a NaN read (flat mesh) keeps round 10h's weight 1."""
+    non-increasing; a NaN read (flat mesh) keeps the full weight 1."""
     assert hl.tangential_weight(0.0) == 1.0
     assert hl.tangential_weight(hl.C_0) == pytest.approx(1.0)
     assert hl.tangential_weight(hl.C_1) == pytest.approx(0.0)
@@ -43,7 +43,7 @@ def test_weight_ramp_maths():
 
 
 def test_length_law_maths():
-    """At w = 1 the length is round 10h's k (presmooth_steps, brute force over a grid of γ̂ and
+    """At w = 1 the length is presmooth's k (presmooth_steps, brute force over a grid of γ̂ and
     r_t); at w = 0 it is round((γ̂/γ_r)²) whatever r_t; it never grows as w falls."""
     kw = dict(support_fraction=0.05, outside=1.0, willmore=1.0, impulsive=False)
     for g in np.linspace(0.17, 0.45, 15):
@@ -59,7 +59,7 @@ def test_length_law_maths():
 
 def test_resolved_sphere_keeps_the_length_relief_shortens_it():
     """On a uniformly sampled sphere the read is near 0 (h constant), so w = 1 and the low-pass is
-    round 10h's T^k V exactly; on the same sphere with relief at the mesh's own scale the read is
+    presmooth's T^k V exactly; on the same sphere with relief at the mesh's own scale the read is
     above c_1, w = 0 and the low-passed input is T^{k'} V with k' = (γ̂/γ_r)² (random-direction
     noise: r_t = 1; a small γ̂ = 0.07, since the input here carries no noise for the correction
     of the read to take out)."""
@@ -76,7 +76,8 @@ def test_resolved_sphere_keeps_the_length_relief_shortens_it():
 
 
 def test_relief_read_takes_out_the_filtered_noise():
-    """c̃ with γ̂ = 0 is round 11c's c on T^k V (no correction). With γ̂ > 0 the energy of a white
+    """c̃ with γ̂ = 0 is the coarse read c (:mod:`meshrepair.denoise.coarse`) on T^k V (no
+    correction). With γ̂ > 0 the energy of a white
     field of level γ̂ ℓ̄ through the same k pairs is taken out of both norms: brute force with
     dense matrices; on a noisy sphere the corrected read is below the plain one and nearer the
     clean sphere's (the residual noise is what makes the plain read high)."""
@@ -139,8 +140,8 @@ def test_read_is_invariant_to_similarity():
 def test_nicolo_heavy_random_noise_beats_the_tuned_peer():
     """nicolo γ0.5 random (compare.py's seed 1): the read marks relief at the mesh's scale, the
     low-pass is shortened (41 → 16 pairs) and MSAE falls below PyMeshLab Taubin's oracle-tuned
-    85.4 of docs/comparison.md (measured 84.50; 88.44 with round 10h's length). spot γ0.5 random
-    (resolved curvature) keeps round 10h's length (40) and its 58.15."""
+    85.4 of docs/comparison.md (measured 84.50; 88.44 with the unshortened length). spot γ0.5
+    random (resolved curvature) keeps the presmooth length (40) and its 58.15."""
     V, F = shared_mesh("nicolo.ply")
     r = denoise(add_noise(V, F, 0.5, direction="random", seed=1), F)
     assert r.params["presmooth_roughness"] > hl.C_1

@@ -1,4 +1,4 @@
-"""Corners inside a hole (issue 13, round 2): two corners of a slab joined by an edge wholly
+"""Corners inside a hole: two corners of a slab joined by an edge wholly
 inside the hole (twin corners), and the straightness rule that picks the corner point."""
 
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""Triharmonic (curvature-continuous) fairing of hole patches (issue 13, round 2)."""
+"""Triharmonic (curvature-continuous) fairing of hole patches (docs/holes.md, section 5)."""
 
 from __future__ import annotations
 

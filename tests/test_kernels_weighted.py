@@ -1,4 +1,4 @@
-"""Round 11v's fused passes: the per-edge-weight t-update and lengths + history energy
+"""Fused passes: the per-edge-weight t-update and lengths + history energy
 (:mod:`meshrepair._kernels.weighted`), the one-ring closest points
 (:mod:`meshrepair._kernels.closest`), the sort-free unique edges and the shared face geometry of
 the CAD finish equal what they replace."""

@@ -1,5 +1,5 @@
-"""The layout-keeping resampling of the full-step low-passes (:mod:`meshrepair.denoise.layoutkeep`,
-round 11x)."""
+"""The layout-keeping resampling of the full-step low-passes
+(:mod:`meshrepair.denoise.layoutkeep`)."""
 
 from __future__ import annotations
 
@@ -138,7 +138,7 @@ def test_full_taubin_on_normal_noise_gets_its_layout_back():
 
 
 def test_coarse_to_fine_run_reads_the_low_passed_mesh(monkeypatch):
-    """Round 10h's low-passed input is resampled at the input's layout, but the coarse-to-fine
+    """The presmooth low-passed input is resampled at the input's layout, but the coarse-to-fine
     run reads its noise level on the low-passed mesh before the resampling: the same level and
     Willmore weight as without the step (a noisy icosphere, γ0.5 normal, where the reading on
     the input's layout flipped the weight 16 → 1 and MSAE 1.95 → 13.2); the result keeps the
@@ -158,18 +158,19 @@ def test_coarse_to_fine_run_reads_the_low_passed_mesh(monkeypatch):
 
 @pytest.mark.shared
 def test_spot_normal_noise_vertex_error_shared():
-    """spot γ0.3 normal noise (compare_refresh's row, seed 1): the coarse low-pass (round 11c)
-    now keeps the input's layout: E_V below the E_V-tuned peer's 1.37e-04 (it read 1.58e-04
-    before round 11x; measured 9.15e-05) with MSAE below the MSAE-tuned peer's 61.8 (54.4);
-    spot γ0.5 normal (round 10h's input low-pass): measured 81.7 / 1.47e-04 against the tuned
-    peers' 86.2 / 1.98e-04."""
+    """spot γ0.3 normal noise (compare_refresh's row, seed 1): the coarse low-pass
+    (:mod:`meshrepair.denoise.coarse`) keeps the input's layout: E_V below the E_V-tuned peer's
+    1.37e-04 (measured 9.15e-05; 1.58e-04 without the layout keeping) with MSAE below the
+    MSAE-tuned peer's 61.8 (54.4); spot γ0.5 normal (the presmooth input low-pass): measured
+    81.7 / 1.47e-04 against the tuned peers' 86.2 / 1.98e-04."""
     Vt, F = shared_mesh("spot.ply")
     V0 = add_noise(Vt, F, 0.3, direction="normal", seed=1)
     r = denoise(V0, F)
     assert r.params["coarse_steps"] > 0
     assert vertex_error(r.V, Vt) < 1.2e-4
     assert msae(r.V, Vt, F) < 60.0
-    V5 = add_noise(Vt, F, 0.5, direction="normal", seed=1)  # round 10h's row: 85.9 / 2.43e-04
+    # without the layout keeping this row measured 85.9 / 2.43e-04
+    V5 = add_noise(Vt, F, 0.5, direction="normal", seed=1)
     r5 = denoise(V5, F)
     assert r5.params["presmooth_steps"] > 0
     assert vertex_error(r5.V, Vt) < 1.7e-4 and msae(r5.V, Vt, F) < 84.0

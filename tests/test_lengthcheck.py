@@ -1,5 +1,5 @@
-"""The risk check of round 11t's shorter low-pass length (:mod:`meshrepair.denoise.lengthcheck`,
-round 11z)."""
+"""The risk check (:mod:`meshrepair.denoise.lengthcheck`) of the shorter low-pass length of
+:mod:`meshrepair.denoise.heavylength`."""
 
 from __future__ import annotations
 
@@ -110,7 +110,7 @@ def test_check_off_or_equal_lengths_is_the_identity(monkeypatch):
 
 
 def test_check_runs_only_above_the_weight_gate(monkeypatch):
-    """Round 11t's weight ``w ≤ W_MIN`` leaves 11t's length untouched (no risk read); above it
+    """A heavylength weight ``w ≤ W_MIN`` leaves its length untouched (no risk read); above it
     the smooth sphere under heavy noise takes the long length back."""
     monkeypatch.setattr(lc, "LENGTH_CHECK", True)
     V, F, E, ell = _sphere(bumps=0.0)

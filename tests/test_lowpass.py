@@ -1,4 +1,4 @@
-"""The final low-pass step on the smooth region (:mod:`meshrepair.denoise.lowpass`, round 9s)."""
+"""The final low-pass step on the smooth region (:mod:`meshrepair.denoise.lowpass`)."""
 
 from __future__ import annotations
 
@@ -94,11 +94,10 @@ def test_rules():
 
 @pytest.mark.shared
 def test_spot_smooth_region_better_with_the_step(monkeypatch):
-    """spot γ0.3 normal (docs/comparison.md's row, seed 1): measured 138.3 -> 100.3. Round
-    11c's longer low-pass (:mod:`meshrepair.denoise.coarse`), which fires on this row after this
-    step
-    and takes most of its effect (57.8 with this step, 60.3 without), is switched off: this test
-    measures round 9s."""
+    """spot γ0.3 normal (docs/comparison.md's row, seed 1): measured 138.3 -> 100.3. The longer
+    low-pass of :mod:`meshrepair.denoise.coarse`, which fires on this row after this step and
+    takes most of its effect (57.8 with this step, 60.3 without), is switched off: this test
+    measures the final low-pass step alone."""
     from meshrepair.denoise import coarse as _co
 
     monkeypatch.setattr(_co, "COARSE", False)

@@ -1,5 +1,4 @@
-"""Tests of the organic finish (meshrepair.denoise.organic, issue 12 round 9): its maths and its
-effect."""
+"""Tests of the organic finish (meshrepair.denoise.organic): its maths and its effect."""
 
 import importlib
 
@@ -114,7 +113,8 @@ def test_reintegrate_is_equivariant():
 
 
 def test_rules_truth_table():
-    """The two rules of round 9 fire only where their docstrings say."""
+    """The two rules of the organic finish (guidance and re-integration) fire only where their
+    docstrings say."""
     g = rules_mod.guidance_rule
     assert g(0.27, 1.0, 1.0) == 3 and g(0.2, 1.0, 1.0) == 2 and g(0.14, 1.0, 1.0) == 2
     assert g(0.05, 1.0, 1.0) == 1
@@ -137,7 +137,7 @@ def test_rules_truth_table():
 @pytest.mark.parametrize("case", ["nllr_igea", "nllr_pierrot"])
 def test_organic_finish_beats_published_nllr(case):
     """Quality on two NLLR triples: the defaults beat the published NLLR output on MSAE, E_a and
-    E_V (docs/parameters.md, round 9), and without the finish they do not on MSAE."""
+    E_V (docs/parameters.md, organic.py), and without the finish they do not on MSAE."""
     Vn, Vt, Vp, F = published_triple(case)
     r = denoise_mod.denoise(Vn, F)
     assert r.params["guidance_passes"] > 0 and r.params["reintegrate_steps"] > 0

@@ -1,6 +1,5 @@
 """The data weight of smooth organic meshes at low noise
-(:mod:`meshrepair.denoise.organic_fidelity`,
-round 10l)."""
+(:mod:`meshrepair.denoise.organic_fidelity`)."""
 
 from __future__ import annotations
 

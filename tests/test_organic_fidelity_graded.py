@@ -1,5 +1,5 @@
-"""The data weight graded by the tangential ratio of the noise (round 11n,
-:func:`meshrepair.denoise.organic_fidelity.tangential_gain`)."""
+"""The data weight graded by the tangential ratio of the noise
+(:func:`meshrepair.denoise.organic_fidelity.tangential_gain`)."""
 
 from __future__ import annotations
 
@@ -93,7 +93,7 @@ def test_reanchoring_reads_the_residual_at_the_ungraded_weight():
 
 @pytest.mark.shared
 def test_a_graded_weight_does_not_switch_the_reanchoring_on():
-    """nicolo γ0.2 random, seed 5: at round 10l's weight the residual reads ρ_t 0.626 (not
+    """nicolo γ0.2 random, seed 5: at the ungraded weight the residual reads ρ_t 0.626 (not
     re-anchored, MSAE 52.8); the graded weight (g 1.34) shrinks it to 0.550, and re-anchoring
     there measured 59.0. Read at the ungraded weight it stays off: measured 51.6."""
     V, F = shared_mesh("nicolo.ply")

@@ -1,4 +1,4 @@
-"""Round 9b: the polish's vertex step keeps the data term (meshrepair.denoise.polish_fidelity)."""
+"""The polish's vertex step keeps the data term (meshrepair.denoise.polish_fidelity)."""
 
 import importlib
 
@@ -134,9 +134,9 @@ def test_box_heavy_noise_polish_with_data(monkeypatch):
 @pytest.mark.shared
 def test_quality_published_gcn_fandisk_n6_all_three():
     """gcn_fandisk_n6 (heavy noise): MSAE, E_a and E_V at most GCN-Denoiser's published output
-    (measured 46.47 / 3.941° / 2.125e-03 against 53.90 / 3.951° / 2.169e-03; before round 9b
-    51.52 / 4.170° / 2.624e-03). E_a is within 0.3 % of the published one, so it is asserted
-    within 1 %, the others strictly."""
+    (measured 46.47 / 3.941° / 2.125e-03 against 53.90 / 3.951° / 2.169e-03; with the polish's
+    vertex step without the data term 51.52 / 4.170° / 2.624e-03). E_a is within 0.3 % of the
+    published one, so it is asserted within 1 %, the others strictly."""
     Vn, Vt, Vp, F = published_triple("gcn_fandisk_n6")
     r = denoise(Vn, F)
     assert msae(r.V, Vt, F) < 0.9 * msae(Vp, Vt, F)

@@ -1,5 +1,5 @@
 """Heavy noise on organic meshes: the low-pass of the input before the solve
-(:mod:`meshrepair.denoise.presmooth`, round 10h)."""
+(:mod:`meshrepair.denoise.presmooth`)."""
 
 from __future__ import annotations
 

@@ -1,5 +1,5 @@
-"""Crease-support statistics of :mod:`meshrepair.denoise.regions` on synthetic folds (issue 12,
-round 7)."""
+"""Crease-support statistics of :mod:`meshrepair.denoise.regions` on synthetic
+folds."""
 
 import numpy as np
 import pytest

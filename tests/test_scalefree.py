@@ -1,4 +1,4 @@
-"""Round 11r: the probe's stopping rule in mean-edge-length units (meshrepair.denoise.scalefree)."""
+"""The probe's stopping rule in mean-edge-length units (meshrepair.denoise.scalefree)."""
 
 from pathlib import Path
 
@@ -128,7 +128,7 @@ def test_noise_creases_on_a_sphere_are_not_crease_like():
 
 @pytest.mark.shared  # heavy (two denoise runs of 25k / 41k vertices), no shared data read
 def test_fine_noisy_box_is_a_cad_part_and_fine_noisy_sphere_is_not():
-    """End to end (round 11r): a box subdivided to q ≈ 36 at γ 0.3 reads a raw crease support
+    """End to end: a box subdivided to q ≈ 36 at γ 0.3 reads a raw crease support
     below 20 % but is a CAD part (outside weight 6); a sphere of 41k vertices at γ 0.5 is not."""
     from meshrepair import add_noise, denoise
 
@@ -143,8 +143,8 @@ def test_fine_noisy_box_is_a_cad_part_and_fine_noisy_sphere_is_not():
 
 
 def test_willmore_extra_kernel_matches_its_numpy_twin():
-    """The fused extra-energy pass of the per-edge Willmore weights (round 11r's cost at 1.18M
-    vertices) equals the numpy expression it replaces."""
+    """The fused extra-energy pass of the per-edge Willmore weights (a cost at 1.18M vertices)
+    equals the numpy expression it replaces."""
     rng = np.random.default_rng(5)
     nE, nF = 500, 300
     l, Nv = rng.random(nE), rng.normal(size=(nF, 3))
@@ -160,7 +160,7 @@ def test_willmore_extra_kernel_matches_its_numpy_twin():
 
 
 def test_two_phase_gate_reads_q_and_the_switches(monkeypatch):
-    """Round 11s: two phases only above Q_0 with rule 1 and the gate on; the second phase only
+    """The gated probe: two phases only above Q_0 with rule 1 and the gate on; the second phase only
     when the first reads a non-empty crease-supported region."""
     from meshrepair.denoise import scalefree as sf
 

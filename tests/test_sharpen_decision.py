@@ -1,5 +1,4 @@
-"""The decision of the crease sharpening (meshrepair.denoise.sharpen_decision, issue 12 round
-11k)."""
+"""The decision of the crease sharpening (meshrepair.denoise.sharpen_decision)."""
 
 import importlib
 
@@ -50,7 +49,7 @@ def test_rho_is_the_least_squares_position_on_the_segment():
         assert rho[k] == pytest.approx(t_true, abs=1e-9)
         assert rho[k] == pytest.approx(t_bf, abs=1e-4)
         assert phi[k] == 0.0
-    # ρ > 1/2 is round 9k's test: X lowers the fidelity Σ‖V⁰ − ·‖²
+    # ρ > 1/2 is the data test: X lowers the fidelity Σ‖V⁰ − ·‖²
     for S in (left, right):
         k = lab[np.flatnonzero(S)[0]]
         lower = np.sum((V0 - X)[S] ** 2) < np.sum((V0 - V)[S] ** 2)

@@ -41,4 +41,4 @@ hole: the next one when the patch of the previous one intersects the surface bot
 unfaired. ``"auto"``: planar projection + membrane; ``"liepa"``: Liepa's minimum-weight
 triangulation refined on its own surface (loops up to :data:`meshrepair.holes.LIEPA_MAX_LOOP`
 vertices). Planar first: Liepa first was less accurate after fairing on the smooth benchmark
-cases (docs/holes.md, section 6)."""
+cases (docs/holes.md, section 8)."""

@@ -98,7 +98,7 @@ def _place_patches(V: np.ndarray, F: np.ndarray, holes, skip: dict[int, str], *,
             on_crease = np.unique(ce)
             free = np.setdiff1d(np.arange(nV, len(V1)), on_crease)
             # Liepa's patches: bounded cotangents in the faces round them (anisotropic
-            # triangles, section 3e); planar patches keep the exact ones
+            # triangles, docs/holes.md section 5); planar patches keep the exact ones
             liepa_f = np.zeros(len(F1), bool)
             for i, (_, bf) in _blocks(reports, nV, nF).items():
                 if method[i] == "liepa":
@@ -112,7 +112,8 @@ def _place_patches(V: np.ndarray, F: np.ndarray, holes, skip: dict[int, str], *,
                                cot_faces=near[F1].any(axis=1))
             if triharmonic:
                 # curvature-continuous (triharmonic) candidate, two rings of the surround as
-                # data; kept per hole where it meets the surround more smoothly (section 3d)
+                # data; kept per hole where it meets the surround more smoothly (docs/holes.md
+                # section 5)
                 Vt = fair_triharmonic(V1, F1, free, iterations=3,
                                       exclude_rows=np.union1d(on_crease, sharp_v))
                 Vt = _finite_rows(Vt, V1, np.arange(nV, len(V1)), "the triharmonic fairing")

@@ -19,7 +19,7 @@ LIEPA_COT_RANGE = (0.3, 3.0)
 """Cotangent bounds (angles 18.4°-73.3°) of the thin-plate fairing of patches enclosed by
 Liepa's triangulation (:mod:`meshrepair.fill.place`): its developed / mean-value layouts give
 anisotropic triangles, whose exact cotangents make the fairing follow the triangulation rather
-than the surround. Chosen on the holes benchmark (docs/holes.md, section 3e)."""
+than the surround. Chosen on the holes benchmark (docs/holes.md, section 5)."""
 
 
 def fair_vertices(V: np.ndarray, F: np.ndarray, free: np.ndarray, *, order: int = 2,
