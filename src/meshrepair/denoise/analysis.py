@@ -256,7 +256,9 @@ def _plan_one(V, F, *, lam, th, a, robust_iters, feature_iters, mask_update_ever
                             "off: a robust stage of 0 iterations",
                             by_user=options["stages"] is not None or not regions))
     lam_reads = {"gamma": gamma}
-    if np.isfinite(info["noise_gamma_scale"]):
+    if rule_lam.startswith("organic_fidelity"):
+        lam_reads["tangential_ratio"] = info["tangential_ratio"]
+    elif "own scale" in rule_lam:
         lam_reads["gamma_scale"] = info["noise_gamma_scale"]
     dec.insert(0, Decision("lam", lam_used, "set by the user" if lam is not None else rule_lam,
                            lam_reads, lam is not None))
