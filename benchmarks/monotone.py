@@ -1,7 +1,8 @@
 """Monotone in the noise, and against a tuned Taubin filter at low noise (issue 26's guard).
 
 For every clean mesh of the shared set (``--meshes``), white Gaussian noise (32) along the
-normals (``--direction``) at each level of ``--levels`` (mean edge lengths, seed 1): the MSAE
+normals (``--direction``), or correlated noise of ``--correlated M`` umbrella steps, at each
+level of ``--levels`` (mean edge lengths, seed 1): the MSAE
 (deg²) of ``mr.denoise`` at its defaults, and of the best Taubin λ|μ filter over a grid of
 pair counts (the oracle: it knows the truth). A row is flagged ``NOT MONOTONE`` where a higher
 level gives a lower MSAE than a lower one, and ``> Taubin`` where the defaults lose to the
@@ -9,6 +10,7 @@ tuned filter.
 
     python benchmarks/monotone.py                       # every mesh < 60k vertices, 4 levels
     python benchmarks/monotone.py --meshes bunny spot --levels 0.05 0.1 0.2 --json out.json
+    python benchmarks/monotone.py --correlated 4 --levels 0.1 0.3 0.5   # correlated, ℓ ≈ 2 edges
 """
 
 from __future__ import annotations
@@ -44,6 +46,9 @@ def main(argv=None) -> int:
     ap.add_argument("--meshes", nargs="*", default=MESHES)
     ap.add_argument("--levels", nargs="*", type=float, default=[0.05, 0.1, 0.2, 0.3])
     ap.add_argument("--direction", default="normal", choices=["normal", "random"])
+    ap.add_argument("--correlated", type=int, default=0, metavar="M",
+                    help="correlated noise along the normals instead: M umbrella steps of white "
+                         "noise (scale.correlated_noise, length ≈ √M edges), level γ")
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--json", help="write the rows as JSON")
     args = ap.parse_args(argv)
@@ -57,7 +62,12 @@ def main(argv=None) -> int:
         Vt, F, _ = C.read(name)
         prev = None
         for g in args.levels:
-            Vn = mr.add_noise(Vt, F, g, direction=args.direction, seed=args.seed)
+            if args.correlated:
+                from meshrepair.denoise.scale import correlated_noise
+
+                Vn = correlated_noise(Vt, F, g, args.correlated, seed=args.seed)
+            else:
+                Vn = mr.add_noise(Vt, F, g, direction=args.direction, seed=args.seed)
             t = time.perf_counter()
             r = mr.denoise(Vn, F)
             dt = time.perf_counter() - t
@@ -69,7 +79,8 @@ def main(argv=None) -> int:
             if m > mt:
                 flags.append("> Taubin")
             prev = m
-            rows.append({"mesh": name, "gamma": g, "direction": args.direction, "msae": m,
+            rows.append({"mesh": name, "gamma": g, "direction": args.direction,
+                         "correlated": args.correlated, "msae": m,
                          "taubin": mt, "taubin_pairs": kt, "seconds": dt,
                          "willmore_weight": r.params.get("willmore_weight"),
                          "presmooth_steps": r.params.get("presmooth_steps"),

@@ -89,8 +89,11 @@ def _execute(plan: DenoisePlan, V, F, callback=None) -> DenoiseResult:
     lam_used = plan.lam
     robust_iters = st.robust_iters
 
+    n_solves = [0]
+
     def solve(stages_):
         """The main run; on a reordered copy the result is mapped back exactly."""
+        n_solves[0] += 1
         opts = SolverOptions(stages=tuple(stages_), willmore_weight=ww, **opts_kw)
         res = ADMMSolver(Fw, len(V), options=opts, topo=topo_w, edge_force=force,
                          flat_edges=flat, anchor=anchor, willmore_edges=wedges
@@ -172,7 +175,7 @@ def _execute(plan: DenoisePlan, V, F, callback=None) -> DenoiseResult:
               "huber_delta": plan.huber_delta, "impulsive": impulsive,
               "regions": st.probe,
               "fidelity_data": "input" if (Vd is not st.Vw or not st.n_unf) else "unfolded",
-              "result_folds_unfolded": n_res_folded, **info}
+              "result_folds_unfolded": n_res_folded, "main_solves": n_solves[0], **info}
     return DenoiseResult(
         V=V_out, F=F, M_E=M_E, edges=topo.edges.copy(), M_V=res.M_V, history=res.history,
         iterations=res.iterations, stop_reason=res.stop_reason, noise_estimate=gamma,
@@ -192,8 +195,10 @@ def _execute_tested(plan: DenoisePlan, V, F, callback) -> DenoiseResult:
     t = white_residual(V, r.V, F, st.topo.edges, st.gamma)
     log.info("white-noise test of the residual: rho1 %.3f, level %.3f gamma (%s)", t.rho1,
              t.level_ratio, "white" if t.white else "correlated")
+    n_white = r.params["main_solves"]
     if not t.white and r.stop_reason != "interrupted":
         r = _execute(plan.if_correlated, V, F, callback)
+        r.params["main_solves"] += n_white
     dec = Decision("noise_model", "white" if t.white else "correlated",
                    "white-noise test of the white model's residual (whiteness.py)",
                    {"rho1": t.rho1, "level_ratio": t.level_ratio})

@@ -23,7 +23,10 @@ class DenoiseResult:
     iterations : int
     stop_reason : str
     noise_estimate : float, γ̂ of the input in mean edge lengths
-    params : dict, the parameters actually used
+    params : dict, the parameters actually used (``params["main_solves"]``: main ADMM solves
+        the call ran, the probe not counted: 1, plus one for the correlated model when the
+        white result fails the white-noise test, plus the discrepancy test's or the collapse
+        check's solve again)
     n_unfolded : int, faces folded over in the input that were unfolded before the solve
         (``params["result_folds_unfolded"]``: faces folded in the solve's result, unfolded
         after it)

@@ -77,7 +77,7 @@ def noise_statistics(V: np.ndarray, F: np.ndarray, topo: Topology | None = None
 
     The two agree for Gaussian noise (measured within 5 % on the shared meshes at γ = 0.2);
     impulsive noise, where a minority of vertices moves far, reads 1.5× higher in RMS
-    (twelve__impulsive0.5: 0.206 vs 0.306).
+    (an impulsive CAD input of the shared set: 0.206 vs 0.306).
 
     Returns
     -------
