@@ -6,9 +6,15 @@ Usage::
     python benchmarks/ablation.py --table rows.json     # the markdown of a saved run
 
 Rows are the whole grid of ``benchmarks/holdout.py`` (its ``CASES``, loaded by its ``load`` and
-split by its ``DESIGN`` set into *design* and *check*) plus the published triples of
-``shared/meshes/published`` (``benchmarks/published.py``'s ``cases``), a third group. The grid
-is small meshes (3k-35k vertices); the full run takes about 15 minutes on one core.
+split by its ``DESIGN`` set into *design* and *check*), eight rows of
+``benchmarks/whiteness.py`` (:data:`WHITENESS`, split by that script's ``DESIGN`` / ``CHECK``:
+the grid of holdout.py has no input that reads correlated but is white, so the white-noise test
+would not be ablated), and the published triples of ``shared/meshes/published``
+(``benchmarks/published.py``'s ``cases``), a third group (two of them, ``gcn_trim_star_n3`` and
+``tgv_kinect_pyramid``, are the inputs of holdout's ``trim_star n3`` and
+``kinect_pyramid (real)``). The meshes are small (3k-35k vertices); the full run takes about
+30 minutes on one core. Not on this grid: meshes finer than 35k vertices, where the
+resolution gates of ``scalefree.py`` and ``coarse_lowpass.py`` act (``benchmarks/resolution.py``).
 
 Each column is one ingredient switched off, everything else at its default:
 
@@ -21,7 +27,8 @@ Each column is one ingredient switched off, everything else at its default:
   ``mr.denoise(V, F)``, restored afterwards. Finishing steps first (they run after the main
   solve), then the gates of the reading (they change the plan).
 
-Entries are MSAE(ingredient off) / MSAE(default): above 1 the ingredient pays on that row,
+Entries are MSAE(ingredient off) / MSAE(default) (``--metric ev``: the same with E_V, both are
+recorded): above 1 the ingredient pays on that row,
 below 1 it costs; ``·`` marks a run whose result is identical to the default's. The summary gives
 per split the rows where the result changed (``n``), the median ratio over those rows, and the
 rows worse (> 1.05) / better (< 0.95) without the ingredient.
@@ -46,6 +53,7 @@ import numpy as np  # noqa: E402
 
 import holdout as H  # noqa: E402
 import published as P  # noqa: E402
+import whiteness as W  # noqa: E402
 
 
 @dataclass(frozen=True)
@@ -193,9 +201,15 @@ INGREDIENTS = [
                "for resolution", READ, switch="SCALE_FREE_CAD"),
 ]
 
+WHITENESS = ["w:trim_star:0.1", "w:trim_star:0.2", "c:fandisk:0.4:3", "c:twelve:0.4:3",
+             "w:trim_star:0.1:2", "w:spot:0.1:2", "c:spot:0.4:3", "c:trim_star:0.3:3"]
+"""Rows of ``benchmarks/whiteness.py`` (the inputs that read as correlated noise, where the
+white and the correlated models both run), with that script's design / check split; the
+bunny rows (35k vertices, two models) are left out for time."""
+
 QUICK = ["fandisk γ0.3 (published)", "twelve impulsive 0.5", "kinect_pyramid (real)",
          "spot γ0.4 normal", "rocker_arm γ0.3 normal", "camelhead correlated m=8 γ0.6",
-         "nllr_pierrot"]
+         "w:trim_star:0.1", "nllr_pierrot"]
 
 
 def _modules():
@@ -223,9 +237,20 @@ def switched_off(name: str):
 
 
 def cases(quick: bool, only: str | None):
-    """``(name, split, loader)`` rows: holdout's grid, then the published triples."""
+    """``(name, split, loader)`` rows: holdout's grid, whiteness's rows, the published
+    triples."""
     out = [(c[1], "design" if c[1] in H.DESIGN else "check", lambda c=c: H.load(c))
            for c in H.CASES]
+
+    def wh(c):
+        Vt, Y, F = W._inputs(c)
+        return Y, Vt, F
+
+    for c in WHITENESS:
+        split = "design" if c in W.DESIGN else "check" if c in W.CHECK else None
+        if split is None:
+            raise SystemExit(f"{c} is in neither split of benchmarks/whiteness.py")
+        out.append((c, split, lambda c=c: wh(c)))
 
     def pub(n):
         from meshrepair import read_mesh
@@ -243,7 +268,7 @@ def cases(quick: bool, only: str | None):
 
 def run_row(name, split, loader, ingredients) -> dict:
     import meshrepair as mr
-    from meshrepair import msae
+    from meshrepair import msae, vertex_error
 
     Vn, Vt, F = loader()
     t0 = time.perf_counter()
@@ -251,7 +276,7 @@ def run_row(name, split, loader, ingredients) -> dict:
     V0 = mr.denoise(Vn, F, plan=plan).V
     base = msae(V0, Vt, F)
     row = {"case": name, "split": split, "nV": len(Vn), "msae_in": msae(Vn, Vt, F),
-           "msae": base, "off": {}}
+           "msae": base, "ev": vertex_error(V0, Vt), "off": {}}
     for ing in ingredients:
         if ing.edit is not None:
             p, changed = ing.edit(plan)
@@ -262,17 +287,25 @@ def run_row(name, split, loader, ingredients) -> dict:
         else:
             with switched_off(ing.switch):
                 V = mr.denoise(Vn, F).V
-        row["off"][ing.key] = {"msae": msae(V, Vt, F), "same": bool(np.array_equal(V, V0))}
+        row["off"][ing.key] = {"msae": msae(V, Vt, F), "ev": vertex_error(V, Vt),
+                               "same": bool(np.array_equal(V, V0))}
     row["time_s"] = time.perf_counter() - t0
     return row
 
 
+METRIC = "msae"  # or "ev" (E_V, (34)): ``--metric``
+
+
+def _label() -> str:
+    return {"msae": "MSAE", "ev": "E_V"}[METRIC]
+
+
 def ratio(row, key):
-    """MSAE(off) / MSAE(default); None where the edit does not apply."""
+    """METRIC(off) / METRIC(default); None where the edit does not apply."""
     o = row["off"].get(key)
     if o is None:
         return None
-    return 1.0 if o["same"] else o["msae"] / row["msae"]
+    return 1.0 if o["same"] else o[METRIC] / row[METRIC]
 
 
 def _cell(row, key):
@@ -280,14 +313,15 @@ def _cell(row, key):
     o = row["off"].get(key)
     if o is None:
         return "="
-    return "·" if o["same"] else f"{o['msae'] / row['msae']:.2f}"
+    return "·" if o["same"] else f"{o[METRIC] / row[METRIC]:.2f}"
 
 
 def per_case_table(rows, ingredients) -> str:
-    head = "| case | split | default MSAE | " + " | ".join(i.key for i in ingredients) + " |"
+    head = (f"| case | split | default {_label()} | " + " | ".join(i.key for i in ingredients)
+            + " |")
     out = [head, "|---|---|---:|" + "---:|" * len(ingredients)]
     for r in rows:
-        out.append(f"| {r['case']} | {r['split']} | {r['msae']:.2f} | "
+        out.append(f"| {r['case']} | {r['split']} | {r[METRIC]:.4g} | "
                    + " | ".join(_cell(r, i.key) for i in ingredients) + " |")
     return "\n".join(out)
 
@@ -327,14 +361,15 @@ def summary_table(rows, ingredients) -> str:
 
 
 def markdown(rows, ingredients, machine: str) -> str:
+    m = _label()
     parts = [machine, "", "Summary (per split: rows where the result changed / rows; median "
-             "ratio MSAE(off) / MSAE(default) over those rows; rows worse (> 1.05) and better "
+             f"ratio {m}(off) / {m}(default) over those rows; rows worse (> 1.05) and better "
              "(< 0.95) without the ingredient):", "", summary_table(rows, ingredients)]
     for g in (PLAN, FINISH, READ):
         sel = [i for i in ingredients if i.group == g]
         if sel:
             plural = g.replace("switch", "switche") + "s"
-            parts += ["", f"Per case, {plural} (MSAE(off) / MSAE(default); = not in the "
+            parts += ["", f"Per case, {plural} ({m}(off) / {m}(default); = not in the "
                       "plan, · result unchanged):", "",
                       per_case_table(rows, sel)]
     return "\n".join(parts)
@@ -355,7 +390,11 @@ def main(argv=None) -> None:
     ap.add_argument("--json", help="write the rows here")
     ap.add_argument("--out", help="write the markdown here")
     ap.add_argument("--table", metavar="JSON", help="print the markdown of a saved run and exit")
+    ap.add_argument("--metric", choices=("msae", "ev"), default="msae",
+                    help="the error the ratios compare: MSAE (33) or E_V (34)")
     args = ap.parse_args(argv)
+    global METRIC
+    METRIC = args.metric
     ings = INGREDIENTS
     if args.columns:
         keys = [k.strip() for k in args.columns.split(",")]
