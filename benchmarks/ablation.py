@@ -13,8 +13,8 @@ would not be ablated), and the published triples of ``shared/meshes/published``
 (``benchmarks/published.py``'s ``cases``), a third group (two of them, ``gcn_trim_star_n3`` and
 ``tgv_kinect_pyramid``, are the inputs of holdout's ``trim_star n3`` and
 ``kinect_pyramid (real)``). The meshes are small (3k-35k vertices); the full run takes about
-30 minutes on one core. Not on this grid: meshes finer than 35k vertices, where the
-resolution gates of ``scalefree.py`` and ``coarse_lowpass.py`` act (``benchmarks/resolution.py``).
+30 minutes on one core. Not on this grid: finer meshes (``benchmarks/resolution.py``), for
+which the resolution gates of ``scalefree.py`` and ``coarse_lowpass.py`` are written.
 
 Each column is one ingredient switched off, everything else at its default:
 
@@ -28,10 +28,10 @@ Each column is one ingredient switched off, everything else at its default:
   solve), then the gates of the reading (they change the plan).
 
 Entries are MSAE(ingredient off) / MSAE(default) (``--metric ev``: the same with E_V, both are
-recorded): above 1 the ingredient pays on that row,
-below 1 it costs; ``·`` marks a run whose result is identical to the default's. The summary gives
-per split the rows where the result changed (``n``), the median ratio over those rows, and the
-rows worse (> 1.05) / better (< 0.95) without the ingredient.
+recorded): above 1 the ingredient pays on that row, below 1 it costs; ``·`` marks a run whose
+result is identical to the default's. The summary gives per split the rows where the result
+changed (``n``), the median ratio over those rows, and the rows worse (> 1.05) / better
+(< 0.95) without the ingredient.
 """
 
 from __future__ import annotations
