@@ -56,9 +56,11 @@ from meshrepair._kernels.edges import (  # noqa: F401
 from meshrepair._kernels.faces import (  # noqa: F401
     _np_face_area2_lmax2,
     _np_face_normals,
+    _np_min_corner_cos,
     _np_vertex_normals,
     face_area2_lmax2,
     face_normals,
+    min_corner_cos,
     vertex_normals,
 )
 from meshrepair._kernels.venergy import (  # noqa: F401
@@ -100,6 +102,7 @@ if HAVE_NUMBA:
     from meshrepair._kernels.faces import (  # noqa: F401
         _nb_face_area2_lmax2,
         _nb_face_normals,
+        _nb_min_corner_cos,
         _nb_vertex_normals,
         _tri,
     )

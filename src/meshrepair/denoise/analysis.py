@@ -291,6 +291,8 @@ def _plan_one(V, F, *, lam, th, a, robust_iters, feature_iters, mask_update_ever
     if reorder:
         dec.append(Decision("reorder", True, f"Morton order: ≥ {REORDER_MIN_VERTICES} vertices",
                             {"vertices": len(V)}))
+    for t in {id(topo): topo, id(topo_w): topo_w}.values():  # the readings' operators: the
+        t.drop_cache(keep=("interior_edges",))  # main solve keeps only the solver's tables
     reading = {"gamma": gamma, "gamma_rms": gamma_rms, "impulsive": bool(impulsive),
                "folded_faces": n_unf, **{k: info[k] for k in
                                          ("tangential_ratio", "support_fraction", "noise_rho",
