@@ -13,9 +13,14 @@ probe) are a row of their own, and the table gives the set-up with and without t
 A warm-up call on a small mesh of the same kind loads the compiled kernels first; each figure is
 the median over ``--repeats`` calls in this process.
 
+With ``--old SRC`` it runs ``--pairs`` pairs of fresh processes, one on the package at ``SRC``
+(a frozen copy, e.g. of the previous commit) and one on this checkout, alternately, so both
+columns see the same load; each column is then the median over its processes.
+
 Usage::
 
     python benchmarks/setup_costs.py [--mesh twelve:4] [--repeats 3] [--json out.json]
+    python benchmarks/setup_costs.py --old /tmp/snap --pairs 3 [--json both.json]
     python benchmarks/setup_costs.py --table before.json after.json   # side by side
 
 Prints a markdown table and the machine line with the memory probe (benchmarks/_common.py).
@@ -158,6 +163,7 @@ def measure(mesh: str, repeats: int) -> dict:
     keys = list(dict.fromkeys(k for r in runs for k in r))
     info = C.machine_info()
     return {"mesh": mesh, "n_vertices": len(V), "repeats": repeats, "git": C.git_state(),
+            "pkg": C.package_state(),
             "machine": (f"{info.get('cpu')}, {info.get('cores')} cores, load "
                         f"{info.get('loadavg')}, memory probe {info.get('memprobe_ms')} ms"),
             "phases": {k: [r.get(k, 0.0) for r in runs] for k in keys}}
@@ -185,16 +191,60 @@ def table(results: list[dict], names: list[str]) -> str:
     return "\n".join(out)
 
 
+def _paired(args) -> int:
+    """``--pairs`` alternating fresh processes on ``--old`` and on this checkout."""
+    import os
+    import subprocess
+    import tempfile
+
+    runs: dict[str, list[dict]] = {"old": [], "new": []}
+    with tempfile.TemporaryDirectory() as tmp:
+        for i in range(args.pairs):
+            for which in ("old", "new"):
+                out = Path(tmp) / f"{which}{i}.json"
+                env = dict(os.environ)
+                if which == "old":
+                    env["PYTHONPATH"] = str(Path(args.old).resolve())
+                subprocess.run([sys.executable, __file__, "--mesh", args.mesh, "--repeats", "1",
+                                "--json", str(out)], env=env, check=True,
+                               stdout=subprocess.DEVNULL)
+                runs[which].append(json.loads(out.read_text()))
+    res = []
+    for which, rs in runs.items():
+        r = dict(rs[-1])
+        keys = list(dict.fromkeys(k for x in rs for k in x["phases"]))
+        r["phases"] = {k: [x["phases"].get(k, [0.0])[0] for x in rs] for k in keys}
+        r["repeats"] = len(rs)
+        r["git"] = f"{r['git']} ({which}: {rs[-1].get('pkg', '')})"
+        res.append(r)
+    if args.json:
+        Path(args.json).write_text(json.dumps(res, indent=1))
+    print(table(res, ["before", "after"]))
+    print(f"\n{args.pairs} pairs of fresh processes, alternating; 'before' = the package at "
+          f"{args.old}.")
+    return 0
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--mesh", default="twelve:4", help="BASE:LEVELS (subdivided, γ 0.3)")
     ap.add_argument("--repeats", type=int, default=3, help="timed calls (median)")
     ap.add_argument("--json", help="also write the measurements here")
     ap.add_argument("--table", nargs="+", metavar="JSON", help="print saved measurements")
+    ap.add_argument("--old", metavar="SRC", help="also measure the package at SRC, paired")
+    ap.add_argument("--pairs", type=int, default=3, help="with --old: process pairs")
     args = ap.parse_args(argv)
+    if args.old:
+        return _paired(args)
     if args.table:
-        res = [json.loads(Path(p).read_text()) for p in args.table]
-        print(table(res, [Path(p).stem for p in args.table]))
+        res, names = [], []
+        for p in args.table:
+            r = json.loads(Path(p).read_text())
+            rs = r if isinstance(r, list) else [r]  # a paired file holds both columns
+            res += rs
+            names += ([f"{Path(p).stem}:{n}" for n in ("before", "after")] if len(rs) == 2
+                      else [Path(p).stem])
+        print(table(res, names))
         return 0
     C.limit_threads(1)
     r = measure(args.mesh, args.repeats)

@@ -245,3 +245,30 @@ def min_corner_cos(F, N, n_vertices):
     if HAVE_NUMBA:
         return _nb_min_corner_cos(F, N, int(n_vertices))
     return _np_min_corner_cos(F, N, int(n_vertices))
+
+
+def _np_folded(N, S, cos_max):
+    sn = np.linalg.norm(S, axis=1)
+    return np.einsum("ij,ij->i", N, S) <= cos_max * sn
+
+
+if HAVE_NUMBA:
+
+    @njit(cache=True)
+    def _nb_folded(N, S, cos_max):  # pragma: no cover - compiled
+        out = np.empty(N.shape[0], np.bool_)
+        for f in range(N.shape[0]):
+            s0, s1, s2 = S[f, 0], S[f, 1], S[f, 2]
+            sn = np.sqrt((s0 * s0 + s1 * s1) + s2 * s2)  # numpy's norm order
+            d = (N[f, 0] * s0 + N[f, 2] * s2) + N[f, 1] * s1  # numpy's einsum order
+            out[f] = d <= cos_max * sn
+        return out
+
+
+def folded(N, S, cos_max):
+    """``N_f · S_f <= cos_max |S_f|`` per face, ``(nF,)`` bool: the face normal against the sum
+    ``S`` of its neighbours' normals (:func:`meshrepair.model.relax.locally_flipped_faces`)."""
+    if HAVE_NUMBA:
+        return _nb_folded(np.ascontiguousarray(N, dtype=np.float64),
+                          np.ascontiguousarray(S, dtype=np.float64), float(cos_max))
+    return _np_folded(N, S, cos_max)

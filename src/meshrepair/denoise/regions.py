@@ -44,7 +44,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from meshrepair import _kernels as _k
-from meshrepair.mesh.topology import Topology, adjacency, cached, mask_key
+from meshrepair.mesh.topology import Topology, cached, mask_key
 
 MIN_CHAIN = 30
 LONG_CHAIN = 60
@@ -94,27 +94,22 @@ def _angle(A: np.ndarray, B: np.ndarray) -> np.ndarray:
 def _side_adjacency(topo: Topology, mask: np.ndarray, n_faces: int) -> sp.csr_matrix:
     """``I + A``, A the face adjacency through the interior edges *not* in ``mask``; built once
     per topology and mask (the chain reads of one set of normals share it)."""
-    def build():
+    def build():  # the pattern only: the callers read which faces, not the values
         ok = topo.interior & ~mask
-        a, b = topo.edge_faces[ok, 0], topo.edge_faces[ok, 1]
-        A = sp.coo_matrix((np.ones(2 * len(a)), (np.r_[a, b], np.r_[b, a])),
-                          shape=(n_faces, n_faces)).tocsr()
-        return A + sp.eye(n_faces, format="csr")
+        indptr, indices = _k.sym_csr(topo.edge_faces[ok, 0], topo.edge_faces[ok, 1], n_faces,
+                                     diag=True)
+        return sp.csr_matrix((np.ones(len(indices)), indices, indptr),
+                             shape=(n_faces, n_faces))
 
     return cached(topo, ("side_adjacency", n_faces, mask_key(mask)), build)
 
 
-def _masked_adjacency(topo: Topology, mask: np.ndarray) -> sp.csr_matrix:
-    """The 0/1 vertex adjacency through the edges of ``mask``, built once per topology and
-    mask."""
-    def build():
-        nV = topo.n_vertices
-        ef = topo.edges[mask]
-        return sp.coo_matrix((np.ones(2 * len(ef)), (np.r_[ef[:, 0], ef[:, 1]],
-                                                     np.r_[ef[:, 1], ef[:, 0]])),
-                             shape=(nV, nV)).tocsr()
-
-    return cached(topo, ("masked_adjacency", mask_key(mask)), build)
+def _grow(act: np.ndarray, e: np.ndarray) -> np.ndarray:
+    """``act`` and the vertices one edge of ``e`` (k, 2) away from it (a ring of dilation)."""
+    out = act.copy()
+    out[e[act[e[:, 0]], 1]] = True
+    out[e[act[e[:, 1]], 0]] = True
+    return out
 
 
 def chain_statistics(topo: Topology, N: np.ndarray, mask: np.ndarray, edges: np.ndarray, *,
@@ -258,14 +253,14 @@ def crease_support(topo: Topology, N: np.ndarray, *, th: float = 30.0,
     act = np.zeros(nV, bool)
     act[topo.edges[chains].ravel()] = True
     if rings > 0 and act.any():
-        A = adjacency(topo)
+        e = topo.edges
         for _ in range(rings):
-            act |= (A @ act.astype(np.float64)) > 0
+            act = _grow(act, e)
         if flat_rings > 0:
             flat = ~creased_edges(topo, N, flat_angle) & topo.interior
-            Af = _masked_adjacency(topo, flat)
+            ef = e[flat]
             for _ in range(flat_rings):
-                new = act | ((Af @ act.astype(np.float64)) > 0)
+                new = _grow(act, ef)
                 if new.sum() == act.sum():
                     break
                 act = new

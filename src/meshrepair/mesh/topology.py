@@ -130,16 +130,31 @@ def mask_key(mask: np.ndarray) -> bytes:
 
 
 def adjacency(topo: Topology) -> sp.csr_matrix:
-    """The symmetric 0/1 vertex adjacency of ``topo`` (:func:`vertex_adjacency`), cached."""
-    return cached(topo, ("adjacency",), lambda: vertex_adjacency(topo.edges, topo.n_vertices))
+    """The symmetric 0/1 vertex adjacency of ``topo`` (the matrix of :func:`vertex_adjacency`,
+    rows sorted), cached."""
+    def build():
+        from meshrepair._kernels import sym_csr
+
+        n = topo.n_vertices
+        indptr, indices = sym_csr(topo.edges[:, 0], topo.edges[:, 1], n)
+        return sp.csr_matrix((np.ones(len(indices)), indices, indptr), shape=(n, n))
+
+    return cached(topo, ("adjacency",), build)
 
 
 def umbrella_operator(topo: Topology) -> sp.csr_matrix:
-    """``W = D⁻¹A``: the mean over the one-ring (isolated vertices: a zero row), cached."""
+    """``W = D⁻¹A``: the mean over the one-ring (isolated vertices: a zero row), cached. Its
+    entries are stored as scipy's product ``diags(1 / deg) @ A`` stores them (each row's
+    columns descending), so ``W @ X`` sums in the same order as that product's."""
     def build():
         A = adjacency(topo)
-        deg = np.asarray(A.sum(axis=1)).ravel()
-        return (sp.diags(1.0 / np.maximum(deg, 1.0)) @ A).tocsr()
+        indptr = A.indptr
+        deg = np.diff(indptr)
+        row = np.repeat(np.arange(topo.n_vertices), deg)
+        # entry k of row r is entry indptr[r] + indptr[r + 1] - 1 - k of A: rows reversed
+        src = (indptr[:-1] + indptr[1:] - 1)[row] - np.arange(len(row))
+        return sp.csr_matrix((np.repeat(1.0 / np.maximum(deg, 1.0), deg), A.indices[src],
+                              indptr), shape=A.shape)
 
     return cached(topo, ("umbrella",), build)
 

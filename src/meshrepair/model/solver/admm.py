@@ -211,7 +211,7 @@ class ADMMSolver:
         Vi = V0 if V_init is None else np.asarray(V_init, dtype=np.float64)
         used = np.zeros(topo.n_vertices, bool)
         used[self.F.ravel()] = True
-        center = Vi[used].mean(axis=0)
+        center = (Vi if used.all() else Vi[used]).mean(axis=0)  # (same rows, same sums)
         scale = float(_k.edge_lengths(Vi, topo.edges).mean())
         if not scale > 0:
             from meshrepair.errors import MeshRepairError
