@@ -43,7 +43,7 @@ class Topology:
     edge_faces: np.ndarray
     face_edges: np.ndarray
     edge_counts: np.ndarray = field(repr=False)
-    _cache: dict = field(default_factory=dict, repr=False, compare=False)
+    _cache: dict = field(default_factory=dict, init=False, repr=False, compare=False)
 
     def drop_cache(self, keep: tuple = ()) -> None:
         """Forget the cached operators (:func:`cached`), except those whose key's first item
