@@ -34,12 +34,14 @@ from meshrepair._kernels.connectivity import (  # noqa: F401
     _np_face_neighbour_table,
     _np_group_halfedges,
     _np_morton,
+    _np_sym_csr,
     _np_union_find,
     creased,
     edges_from_groups,
     face_neighbour_table,
     group_halfedges,
     morton,
+    sym_csr,
     union_find,
 )
 from meshrepair._kernels.edges import (  # noqa: F401
@@ -56,9 +58,13 @@ from meshrepair._kernels.edges import (  # noqa: F401
 from meshrepair._kernels.faces import (  # noqa: F401
     _np_face_area2_lmax2,
     _np_face_normals,
+    _np_folded,
+    _np_min_corner_cos,
     _np_vertex_normals,
     face_area2_lmax2,
     face_normals,
+    folded,
+    min_corner_cos,
     vertex_normals,
 )
 from meshrepair._kernels.venergy import (  # noqa: F401
@@ -88,6 +94,7 @@ if HAVE_NUMBA:
         _nb_face_neighbour_table,
         _nb_group_halfedges,
         _nb_morton,
+        _nb_sym_csr,
         _nb_union_find,
     )
     from meshrepair._kernels.edges import (  # noqa: F401
@@ -100,6 +107,8 @@ if HAVE_NUMBA:
     from meshrepair._kernels.faces import (  # noqa: F401
         _nb_face_area2_lmax2,
         _nb_face_normals,
+        _nb_folded,
+        _nb_min_corner_cos,
         _nb_vertex_normals,
         _tri,
     )

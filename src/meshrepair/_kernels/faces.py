@@ -187,3 +187,88 @@ def signed_volume(V, F, center):
     if HAVE_NUMBA:
         return float(_nb_signed_volume(V, F, center))
     return _np_signed_volume(V, F, center)
+
+
+def _np_min_corner_cos(F, N, n_vertices):
+    """Per vertex, the smallest cosine between an incident face normal ``N`` and the mean
+    (``M = A_vf N`` over the incident faces, normalised) of them; 1 where no face is incident."""
+    import scipy.sparse as sp
+
+    F = np.asarray(F, dtype=np.int64)
+    nF = len(F)
+    Avf = sp.csr_matrix((np.ones(3 * nF), (F.ravel(), np.repeat(np.arange(nF), 3))),
+                        shape=(n_vertices, nF))
+    M = Avf @ N
+    M /= np.maximum(np.linalg.norm(M, axis=1, keepdims=True), 1e-300)
+    out = np.ones(n_vertices)
+    for k in range(3):
+        c = np.clip(np.einsum("ij,ij->i", N, M[F[:, k]]), -1.0, 1.0)
+        np.minimum.at(out, F[:, k], c)
+    return out
+
+
+if HAVE_NUMBA:
+
+    @njit(cache=True)
+    def _nb_min_corner_cos(F, N, n_vertices):  # pragma: no cover - compiled
+        M = np.zeros((n_vertices, 3))
+        for m in range(F.shape[0]):
+            for k in range(3):
+                v = F[m, k]
+                M[v, 0] += N[m, 0]
+                M[v, 1] += N[m, 1]
+                M[v, 2] += N[m, 2]
+        for v in range(n_vertices):
+            q = max(np.sqrt(M[v, 0] * M[v, 0] + M[v, 1] * M[v, 1] + M[v, 2] * M[v, 2]), 1e-300)
+            M[v, 0] /= q
+            M[v, 1] /= q
+            M[v, 2] /= q
+        out = np.ones(n_vertices)
+        for m in range(F.shape[0]):
+            for k in range(3):
+                v = F[m, k]
+                # (x0 y0 + x2 y2) + x1 y1: the order numpy's einsum sums three products
+                # in, so the twins agree bit for bit
+                c = (N[m, 0] * M[v, 0] + N[m, 2] * M[v, 2]) + N[m, 1] * M[v, 1]
+                c = min(max(c, -1.0), 1.0)
+                if c < out[v]:
+                    out[v] = c
+        return out
+
+
+def min_corner_cos(F, N, n_vertices):
+    """Per vertex, the smallest cosine between an incident face normal and the normalised sum
+    of the incident face normals, ``(nV,)`` (1 for unreferenced vertices); the sums run over
+    the faces in ascending order, as the sparse product ``A_vf N`` does."""
+    F = np.ascontiguousarray(F, dtype=np.int64)
+    N = np.ascontiguousarray(N, dtype=np.float64)
+    if HAVE_NUMBA:
+        return _nb_min_corner_cos(F, N, int(n_vertices))
+    return _np_min_corner_cos(F, N, int(n_vertices))
+
+
+def _np_folded(N, S, cos_max):
+    sn = np.linalg.norm(S, axis=1)
+    return np.einsum("ij,ij->i", N, S) <= cos_max * sn
+
+
+if HAVE_NUMBA:
+
+    @njit(cache=True)
+    def _nb_folded(N, S, cos_max):  # pragma: no cover - compiled
+        out = np.empty(N.shape[0], np.bool_)
+        for f in range(N.shape[0]):
+            s0, s1, s2 = S[f, 0], S[f, 1], S[f, 2]
+            sn = np.sqrt((s0 * s0 + s1 * s1) + s2 * s2)  # numpy's norm order
+            d = (N[f, 0] * s0 + N[f, 2] * s2) + N[f, 1] * s1  # numpy's einsum order
+            out[f] = d <= cos_max * sn
+        return out
+
+
+def folded(N, S, cos_max):
+    """``N_f · S_f <= cos_max |S_f|`` per face, ``(nF,)`` bool: the face normal against the sum
+    ``S`` of its neighbours' normals (:func:`meshrepair.model.relax.locally_flipped_faces`)."""
+    if HAVE_NUMBA:
+        return _nb_folded(np.ascontiguousarray(N, dtype=np.float64),
+                          np.ascontiguousarray(S, dtype=np.float64), float(cos_max))
+    return _np_folded(N, S, cos_max)

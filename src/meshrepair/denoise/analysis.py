@@ -59,19 +59,21 @@ is memory-bound there, and the reordering measured 1.33 s instead of 1.76 s per 
 coordinate-dependent ordering, which keeps the rotation test exact to rounding)."""
 
 
-def _plan(V, F, **options) -> DenoisePlan:
+def _plan(V, F, *, digest: bool = True, **options) -> DenoisePlan:
     """Read ``(V, F)`` and decide (module docstring); returns the plan, runs no main solve.
 
     When the reading finds correlated noise (an automatic Willmore weight above 1), the plan is
     the white-noise model's, read from the same probe, and carries the correlated-noise model's
     plan in ``if_correlated``: the executor runs the white model first and the correlated one
     only when the white result's residual fails the white-noise test of
-    :mod:`meshrepair.denoise.whiteness`."""
-    p = _plan_one(V, F, **options)
+    :mod:`meshrepair.denoise.whiteness`. ``digest``: record the digest of ``(V, F)`` that
+    :func:`~meshrepair.denoise.execute._execute` checks (off when the caller runs the plan on
+    these arrays at once)."""
+    p = _plan_one(V, F, digest=digest, **options)
     first, p._state.first_probe = p._state.first_probe, None
     if p.willmore_weight <= 1.0 or options.get("willmore_weight") is not None:
         return p
-    pw = _plan_one(V, F, **options, white=True, probe_result=first)
+    pw = _plan_one(V, F, digest=digest, **options, white=True, probe_result=first)
     pw._state.first_probe = None
     from meshrepair.denoise.whiteness import LEVEL_MAX, RHO1_MAX
 
@@ -88,7 +90,8 @@ def _plan_one(V, F, *, lam, th, a, robust_iters, feature_iters, mask_update_ever
               min_feature_edges, tol, unfold, inner_solver, inner_iters, n_solver, stages,
               huber_delta, willmore_weight, regions, polish=True,
               presmoothed: bool = False, read_from: np.ndarray | None = None,
-              capped: bool = False, white: bool = False, probe_result=None) -> DenoisePlan:
+              capped: bool = False, white: bool = False, probe_result=None,
+              digest: bool = True) -> DenoisePlan:
     """One noise model's plan: the white model's with ``white`` (Willmore weight 1), else the
     reading's; ``probe_result`` is a probe already run on this input (not run again)."""
     from meshrepair.mesh.validate import _check_mesh
@@ -271,7 +274,8 @@ def _plan_one(V, F, *, lam, th, a, robust_iters, feature_iters, mask_update_ever
                 Vd=Vd, Vi=Vi, opts_kw=opts_kw, force=force, flat=flat, anchor=anchor, sup=sup,
                 sup_v=sup_v, r1=r1, r1_V=r1_V, info=info, auto_robust=auto_robust,
                 auto_inner=auto_inner, robust_iters=int(robust_iters), probe=bool(probe),
-                presmoothed=bool(presmoothed), mesh_key=mesh_key(V, F), first_probe=first_probe)
+                presmoothed=bool(presmoothed), mesh_key=mesh_key(V, F) if digest else "",
+                first_probe=first_probe)
     kp = 0
     inner_plan = None
     if sup_v is not None and willmore_weight is None and lam is None and not presmoothed:
@@ -293,6 +297,8 @@ def _plan_one(V, F, *, lam, th, a, robust_iters, feature_iters, mask_update_ever
     if reorder:
         dec.append(Decision("reorder", True, f"Morton order: ≥ {REORDER_MIN_VERTICES} vertices",
                             {"vertices": len(V)}))
+    for t in {id(topo): topo, id(topo_w): topo_w}.values():  # the readings' operators: the
+        t.drop_cache(keep=("interior_edges",))  # main solve keeps only the solver's tables
     reading = {"gamma": gamma, "gamma_rms": gamma_rms, "impulsive": bool(impulsive),
                "folded_faces": n_unf, **{k: info[k] for k in
                                          ("tangential_ratio", "support_fraction", "noise_rho",
@@ -345,7 +351,8 @@ def _plan_presmooth(V, F, st: _State, options: dict, *, capped_run: bool, dec: l
                   inner_iters=None if st.auto_inner else o["inner_iters"],
                   n_solver=o["n_solver"], stages=None, huber_delta=o["huber_delta"],
                   willmore_weight=None, regions=o["regions"], polish=False,
-                  presmoothed=True, read_from=Vread, capped=kc < kp0)
+                  presmoothed=True, read_from=Vread, capped=kc < kp0,
+                  digest=bool(st.mesh_key))
     st.presmooth = {"Vp": Vp, "steps": int(kp), "roughness": hc, "tangential_weight": hw,
                     "risk_difference": hd}
     dec.append(Decision("presmooth_steps", int(kp), "presmooth_steps → capped_steps → "

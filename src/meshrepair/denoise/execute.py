@@ -30,18 +30,21 @@ from meshrepair.model.solver import ADMMSolver, SolverOptions
 log = logging.getLogger("meshrepair.denoise.run")
 
 
-def _execute(plan: DenoisePlan, V, F, callback=None) -> DenoiseResult:
-    """Run ``plan`` on ``(V, F)`` (the mesh it was made from; module docstring)."""
+def _execute(plan: DenoisePlan, V, F, callback=None, *, made_here: bool = False
+             ) -> DenoiseResult:
+    """Run ``plan`` on ``(V, F)`` (the mesh it was made from; module docstring).
+    ``made_here``: the plan was just made from these very arrays by the caller, so their
+    digest is not checked again."""
     st: _State = plan._state
     if st is None:
         raise MeshRepairError("this plan carries no reading of a mesh (DenoiseResult.plan is a "
                               "record of what ran): make a plan with mr.plan_denoise(V, F)")
     if (plan.n_vertices != len(V) or plan.n_faces != len(F)
-            or st.mesh_key != mesh_key(V, F)):
+            or (not made_here and st.mesh_key != mesh_key(V, F))):
         raise MeshRepairError("this plan was made for another mesh: make it with "
                               "mr.plan_denoise(V, F) on the mesh you denoise")
     if plan.if_correlated is not None:
-        return _execute_tested(plan, V, F, callback)
+        return _execute_tested(plan, V, F, callback, made_here)
     o = plan.options
     info = dict(st.info)
     gamma, gamma_rms, impulsive, topo = st.gamma, st.gamma_rms, st.impulsive, st.topo
@@ -52,7 +55,7 @@ def _execute(plan: DenoisePlan, V, F, callback=None) -> DenoiseResult:
             f"{plan.presmooth_steps}: the low-passed input and its plan are made by "
             "plan_denoise")
     if plan.presmooth_steps:
-        r = _execute(plan.inner, st.presmooth["Vp"], F, callback)
+        r = _execute(plan.inner, st.presmooth["Vp"], F, callback, made_here=made_here)
         r.params.update(presmooth_steps=plan.presmooth_steps,
                         presmooth_noise_estimate=r.noise_estimate,
                         presmooth_roughness=st.presmooth["roughness"],
@@ -185,19 +188,20 @@ def _execute(plan: DenoisePlan, V, F, callback=None) -> DenoiseResult:
     )
 
 
-def _execute_tested(plan: DenoisePlan, V, F, callback) -> DenoiseResult:
+def _execute_tested(plan: DenoisePlan, V, F, callback, made_here: bool = False
+                    ) -> DenoiseResult:
     """The white model's plan, then the correlated model's when the white result's residual
     fails the white-noise test (:mod:`meshrepair.denoise.whiteness`)."""
     from meshrepair.denoise.whiteness import white_residual
 
     st: _State = plan._state
-    r = _execute(replace(plan, if_correlated=None), V, F, callback)
+    r = _execute(replace(plan, if_correlated=None), V, F, callback, made_here=made_here)
     t = white_residual(V, r.V, F, st.topo.edges, st.gamma)
     log.info("white-noise test of the residual: rho1 %.3f, level %.3f gamma (%s)", t.rho1,
              t.level_ratio, "white" if t.white else "correlated")
     n_white = r.params["main_solves"]
     if not t.white and r.stop_reason != "interrupted":
-        r = _execute(plan.if_correlated, V, F, callback)
+        r = _execute(plan.if_correlated, V, F, callback, made_here=made_here)
         r.params["main_solves"] += n_white
     dec = Decision("noise_model", "white" if t.white else "correlated",
                    "white-noise test of the white model's residual (whiteness.py)",

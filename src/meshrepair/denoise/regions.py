@@ -44,7 +44,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from meshrepair import _kernels as _k
-from meshrepair.mesh.topology import Topology
+from meshrepair.mesh.topology import Topology, cached, mask_key
 
 MIN_CHAIN = 30
 LONG_CHAIN = 60
@@ -92,12 +92,24 @@ def _angle(A: np.ndarray, B: np.ndarray) -> np.ndarray:
 
 
 def _side_adjacency(topo: Topology, mask: np.ndarray, n_faces: int) -> sp.csr_matrix:
-    """``I + A``, A the face adjacency through the interior edges *not* in ``mask``."""
-    ok = topo.interior & ~mask
-    a, b = topo.edge_faces[ok, 0], topo.edge_faces[ok, 1]
-    A = sp.coo_matrix((np.ones(2 * len(a)), (np.r_[a, b], np.r_[b, a])),
-                      shape=(n_faces, n_faces)).tocsr()
-    return A + sp.eye(n_faces, format="csr")
+    """``I + A``, A the face adjacency through the interior edges *not* in ``mask``; built once
+    per topology and mask (the chain reads of one set of normals share it)."""
+    def build():  # the pattern only: the callers read which faces, not the values
+        ok = topo.interior & ~mask
+        indptr, indices = _k.sym_csr(topo.edge_faces[ok, 0], topo.edge_faces[ok, 1], n_faces,
+                                     diag=True)
+        return sp.csr_matrix((np.ones(len(indices)), indices, indptr),
+                             shape=(n_faces, n_faces))
+
+    return cached(topo, ("side_adjacency", n_faces, mask_key(mask)), build)
+
+
+def _grow(act: np.ndarray, e: np.ndarray) -> np.ndarray:
+    """``act`` and the vertices one edge of ``e`` (k, 2) away from it (a ring of dilation)."""
+    out = act.copy()
+    out[e[act[e[:, 0]], 1]] = True
+    out[e[act[e[:, 1]], 0]] = True
+    return out
 
 
 def chain_statistics(topo: Topology, N: np.ndarray, mask: np.ndarray, edges: np.ndarray, *,
@@ -242,19 +254,13 @@ def crease_support(topo: Topology, N: np.ndarray, *, th: float = 30.0,
     act[topo.edges[chains].ravel()] = True
     if rings > 0 and act.any():
         e = topo.edges
-        A = sp.coo_matrix((np.ones(2 * len(e)), (np.r_[e[:, 0], e[:, 1]],
-                                                 np.r_[e[:, 1], e[:, 0]])),
-                          shape=(nV, nV)).tocsr()
         for _ in range(rings):
-            act |= (A @ act.astype(np.float64)) > 0
+            act = _grow(act, e)
         if flat_rings > 0:
             flat = ~creased_edges(topo, N, flat_angle) & topo.interior
             ef = e[flat]
-            Af = sp.coo_matrix((np.ones(2 * len(ef)), (np.r_[ef[:, 0], ef[:, 1]],
-                                                       np.r_[ef[:, 1], ef[:, 0]])),
-                               shape=(nV, nV)).tocsr()
             for _ in range(flat_rings):
-                new = act | ((Af @ act.astype(np.float64)) > 0)
+                new = _grow(act, ef)
                 if new.sum() == act.sum():
                     break
                 act = new
@@ -263,18 +269,9 @@ def crease_support(topo: Topology, N: np.ndarray, *, th: float = 30.0,
 
 def normal_spread(F: np.ndarray, N: np.ndarray, n_vertices: int) -> np.ndarray:
     """Per vertex, the largest angle (degrees) between an incident face normal and the mean of
-    the incident face normals, shape ``(nV,)``."""
-    F = np.asarray(F, dtype=np.int64)
-    nF = len(F)
-    Avf = sp.csr_matrix((np.ones(3 * nF), (F.ravel(), np.repeat(np.arange(nF), 3))),
-                        shape=(n_vertices, nF))
-    M = Avf @ N
-    M /= np.maximum(np.linalg.norm(M, axis=1, keepdims=True), 1e-300)
-    dev = np.zeros(n_vertices)
-    for k in range(3):
-        c = np.clip(np.einsum("ij,ij->i", N, M[F[:, k]]), -1.0, 1.0)
-        np.maximum.at(dev, F[:, k], np.degrees(np.arccos(c)))
-    return dev
+    the incident face normals, shape ``(nV,)``: the arccos of the smallest cosine
+    (:func:`meshrepair._kernels.min_corner_cos`, one pass over the faces)."""
+    return np.degrees(np.arccos(_k.min_corner_cos(F, N, n_vertices)))
 
 
 def flat_edges(topo: Topology, N: np.ndarray, support: np.ndarray, *,

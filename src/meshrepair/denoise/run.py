@@ -11,4 +11,4 @@ from meshrepair.model.schedule import default_stages  # noqa: F401  (re-exported
 
 def _denoise(V, F, *, callback=None, **options) -> DenoiseResult:
     """Plan and run in one call (the public :func:`meshrepair.denoise` without ``plan``)."""
-    return _execute(_plan(V, F, **options), V, F, callback)
+    return _execute(_plan(V, F, digest=False, **options), V, F, callback, made_here=True)

@@ -33,7 +33,7 @@ import scipy.sparse as sp
 
 from meshrepair._kernels.select import median_inplace
 from meshrepair.mesh.geometry import vertex_normals
-from meshrepair.mesh.topology import Topology, edge_topology
+from meshrepair.mesh.topology import Topology, edge_topology, umbrella_operator
 
 SCALES = (1, 2, 4)
 CANDIDATE_STEPS = (0, 1, 2, 3, 4, 6, 8, 12, 16)
@@ -61,12 +61,8 @@ class NoiseScale:
 
 
 def _umbrella_operator(topo: Topology) -> sp.csr_matrix:
-    nV = topo.n_vertices
-    e = topo.edges
-    A = sp.coo_matrix((np.ones(2 * len(e)), (np.r_[e[:, 0], e[:, 1]], np.r_[e[:, 1], e[:, 0]])),
-                      shape=(nV, nV)).tocsr()
-    deg = np.asarray(A.sum(axis=1)).ravel()
-    return (sp.diags(1.0 / np.maximum(deg, 1.0)) @ A).tocsr()
+    """``W = D⁻¹A`` of ``topo``, built once per topology (the readings share it)."""
+    return umbrella_operator(topo)
 
 
 def _interior_vertices(topo: Topology, rings: int, W: sp.csr_matrix) -> np.ndarray:

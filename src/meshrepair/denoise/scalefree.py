@@ -76,7 +76,8 @@ def radius_in_edges(V: np.ndarray, F: np.ndarray, edges: np.ndarray | None = Non
     V = np.asarray(V, dtype=np.float64)
     used = np.zeros(len(V), bool)
     used[np.asarray(F).ravel()] = True
-    X = V[used] - V[used].mean(axis=0)
+    Vu = V if used.all() else V[used]  # (the same rows in the same order: the same sums)
+    X = Vu - Vu.mean(axis=0)
     el = mean_edge_length(V, F) if edges is None else float(edge_lengths(V, edges).mean())
     return float(np.sqrt(np.mean(np.einsum("ij,ij->i", X, X))) / max(el, 1e-300))
 

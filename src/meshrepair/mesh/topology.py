@@ -31,6 +31,10 @@ class Topology:
         ``face_edges[m, k]`` is the index of the edge ``(F[m, k], F[m, (k+1) % 3])``.
     edge_counts : (nE,) int64
         Number of faces incident to each edge (1 boundary, 2 interior, >2 non-manifold).
+
+    Operators derived from the connectivity alone (vertex adjacency, umbrella operator, face
+    adjacencies) are built once per topology by :func:`cached` and kept in ``_cache`` until
+    :meth:`drop_cache`.
     """
 
     n_vertices: int
@@ -39,6 +43,13 @@ class Topology:
     edge_faces: np.ndarray
     face_edges: np.ndarray
     edge_counts: np.ndarray = field(repr=False)
+    _cache: dict = field(default_factory=dict, init=False, repr=False, compare=False)
+
+    def drop_cache(self, keep: tuple = ()) -> None:
+        """Forget the cached operators (:func:`cached`), except those whose key's first item
+        is in ``keep``."""
+        for k in [k for k in self._cache if k[0] not in keep]:
+            del self._cache[k]
 
     @property
     def n_faces(self) -> int:
@@ -98,6 +109,54 @@ def _topology_from_parts(F: np.ndarray, n_vertices: int, edges: np.ndarray, edge
         face_edges=inv.reshape(nF, 3),
         edge_counts=counts,
     )
+
+
+def cached(topo: Topology, key: tuple, build):
+    """``build()`` for this topology, computed on the first call with ``key`` and kept on
+    ``topo`` (a function of the connectivity only; callers do not modify the value)."""
+    v = topo._cache.get(key)
+    if v is None:
+        v = topo._cache[key] = build()
+    return v
+
+
+def mask_key(mask: np.ndarray) -> bytes:
+    """A digest of a boolean mask, for :func:`cached` keys of masked operators."""
+    import hashlib
+
+    m = np.ascontiguousarray(mask, dtype=bool)
+    return hashlib.blake2b(np.packbits(m).tobytes() + str(m.shape).encode(),
+                           digest_size=16).digest()
+
+
+def adjacency(topo: Topology) -> sp.csr_matrix:
+    """The symmetric 0/1 vertex adjacency of ``topo`` (the matrix of :func:`vertex_adjacency`,
+    rows sorted), cached."""
+    def build():
+        from meshrepair._kernels import sym_csr
+
+        n = topo.n_vertices
+        indptr, indices = sym_csr(topo.edges[:, 0], topo.edges[:, 1], n)
+        return sp.csr_matrix((np.ones(len(indices)), indices, indptr), shape=(n, n))
+
+    return cached(topo, ("adjacency",), build)
+
+
+def umbrella_operator(topo: Topology) -> sp.csr_matrix:
+    """``W = D⁻¹A``: the mean over the one-ring (isolated vertices: a zero row), cached. Its
+    entries are stored as scipy's product ``diags(1 / deg) @ A`` stores them (each row's
+    columns descending), so ``W @ X`` sums in the same order as that product's."""
+    def build():
+        A = adjacency(topo)
+        indptr = A.indptr
+        deg = np.diff(indptr)
+        row = np.repeat(np.arange(topo.n_vertices), deg)
+        # entry k of row r is entry indptr[r] + indptr[r + 1] - 1 - k of A: rows reversed
+        src = (indptr[:-1] + indptr[1:] - 1)[row] - np.arange(len(row))
+        return sp.csr_matrix((np.repeat(1.0 / np.maximum(deg, 1.0), deg), A.indices[src],
+                              indptr), shape=A.shape)
+
+    return cached(topo, ("umbrella",), build)
 
 
 def vertex_adjacency(edges: np.ndarray, n_vertices: int) -> sp.csr_matrix:

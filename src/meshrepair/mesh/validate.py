@@ -205,8 +205,8 @@ def _pinched_vertices(F: np.ndarray, n_vertices: int, he_first: np.ndarray,
     n_corners = 3 * F.shape[0]
     corner_vertex = F.ravel()
 
-    def end_corner(h: np.ndarray) -> np.ndarray:
-        return h - h % 3 + (h % 3 + 1) % 3
+    def end_corner(h: np.ndarray) -> np.ndarray:  # the next corner of the same face
+        return np.where(h % 3 == 2, h - 2, h + 1)
 
     # consistent orientation: h1 = u -> w, h2 = w -> u
     a = np.concatenate([he_first, end_corner(he_first)])

@@ -27,11 +27,13 @@ class NormalSystem:
     :meth:`matrix` refreshes the values in place from the squared edge lengths.
     """
 
-    def __init__(self, fa: np.ndarray, fb: np.ndarray, n_faces: int):
+    def __init__(self, fa: np.ndarray, fb: np.ndarray, n_faces: int, table=None):
         self.fa, self.fb, self.nF = fa, fb, n_faces
         self.M = None  # the sparse matrix, built on first use (direct solves only)
-        # per-face neighbour table for the gather-form matrix-vector product
-        self.nb, self.fe = _k.face_neighbour_table(fa, fb, n_faces)
+        # per-face neighbour table for the gather-form matrix-vector product (``table``: the
+        # ``face_neighbour_table(fa, fb, n_faces)`` already built)
+        self.nb, self.fe = (_k.face_neighbour_table(fa, fb, n_faces) if table is None
+                            else table)
 
     def _build(self) -> None:
         fa, fb, nF = self.fa, self.fb, self.nF

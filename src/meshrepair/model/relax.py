@@ -16,7 +16,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from meshrepair.mesh.geometry import vertex_normals
-from meshrepair.mesh.topology import Topology
+from meshrepair.mesh.topology import Topology, adjacency, cached, umbrella_operator
 
 
 class TangentialRelaxer:
@@ -100,12 +100,15 @@ def locally_flipped_faces(V: np.ndarray, topo: Topology, cos_max: float = 0.0) -
     from meshrepair import _kernels as _k
 
     N = _k.face_normals(np.ascontiguousarray(V, dtype=np.float64), topo.faces)
+    a, b = cached(topo, ("interior_faces",), lambda: _interior_faces(topo))
+    return _k.folded(N, _k.neighbor_sum(N, a, b), cos_max)
+
+
+def _interior_faces(topo: Topology) -> tuple[np.ndarray, np.ndarray]:
+    """The two faces of every interior edge, contiguous."""
     ef = topo.edge_faces
     inner = ef[:, 1] >= 0
-    a, b = np.ascontiguousarray(ef[inner, 0]), np.ascontiguousarray(ef[inner, 1])
-    S = _k.neighbor_sum(N, a, b)
-    sn = np.linalg.norm(S, axis=1)
-    return np.einsum("ij,ij->i", N, S) <= cos_max * sn
+    return np.ascontiguousarray(ef[inner, 0]), np.ascontiguousarray(ef[inner, 1])
 
 
 def untangle(V: np.ndarray, topo: Topology, *, max_iter: int = 50,
@@ -129,10 +132,7 @@ def untangle(V: np.ndarray, topo: Topology, *, max_iter: int = 50,
     """
     nV = topo.n_vertices
     e = topo.edges
-    A = sp.coo_matrix((np.ones(2 * len(e)), (np.r_[e[:, 0], e[:, 1]], np.r_[e[:, 1], e[:, 0]])),
-                      shape=(nV, nV)).tocsr()
-    deg = np.asarray(A.sum(axis=1)).ravel()
-    W = sp.diags(1.0 / np.maximum(deg, 1.0)) @ A
+    A, W = adjacency(topo), umbrella_operator(topo)
     frozen = np.zeros(nV, bool)
     frozen[e[topo.boundary].ravel()] = True
     if fixed is not None:

@@ -18,7 +18,7 @@ from meshrepair._kernels.fidelity import anchor_support, tangential_anchor_on
 from meshrepair._kernels.priors import lengths_reg_energy_mixed
 from meshrepair._kernels.tstep import t_from_normals
 from meshrepair._kernels.weighted import lengths_reg_energy_weighted, t_from_normals_weighted
-from meshrepair.mesh.topology import Topology, edge_topology
+from meshrepair.mesh.topology import Topology, cached, edge_topology
 from meshrepair.model._memory import heap_allocations
 from meshrepair.model.fidelity import prox_group_l1
 from meshrepair.model.inner import InnerState, VSubproblem, run_inner
@@ -30,6 +30,16 @@ from meshrepair.model.solver.result import SolverResult, StopRequested
 from meshrepair.model.solver.state import ADMMState
 
 log = logging.getLogger(__name__)
+
+
+def _interior_edges(topo: Topology):
+    """The interior edges ``ie``, their vertices, their two faces ``fa < fb`` and the face
+    neighbour table of the N-subproblem (:class:`~meshrepair.model.linear.NormalSystem`)."""
+    ie = np.flatnonzero(topo.interior)
+    fa = np.ascontiguousarray(topo.edge_faces[ie, 0])
+    fb = np.ascontiguousarray(topo.edge_faces[ie, 1])
+    return (ie, np.ascontiguousarray(topo.edges[ie]), fa, fb,
+            _k.face_neighbour_table(fa, fb, topo.n_faces))
 
 
 def _drop_short_chains(mask: np.ndarray, topo: Topology, min_edges: int) -> np.ndarray:
@@ -90,11 +100,10 @@ class ADMMSolver:
         self.vsub = VSubproblem(self.F, nV, fixed=self.fixed)
         self._relaxer: TangentialRelaxer | None = None  # built on first use (stage.relax > 0)
         # only interior edges carry a normal jump: t, rho1 live on them
-        self.ie = np.flatnonzero(self.topo.interior)
-        self.E_int = np.ascontiguousarray(self.topo.edges[self.ie])
-        self.fa = np.ascontiguousarray(self.topo.edge_faces[self.ie, 0])
-        self.fb = np.ascontiguousarray(self.topo.edge_faces[self.ie, 1])
-        self.nsys = NormalSystem(self.fa, self.fb, self.topo.n_faces)
+        # (built once per topology: the probe and the main solve share them; read-only)
+        self.ie, self.E_int, self.fa, self.fb, table = cached(
+            self.topo, ("interior_edges",), lambda: _interior_edges(self.topo))
+        self.nsys = NormalSystem(self.fa, self.fb, self.topo.n_faces, table=table)
         self._flat_int = (None if self.flat_edges is None or not self.flat_edges.any()
                           else self.flat_edges[self.ie])
         self.willmore_edges = (None if willmore_edges is None
@@ -202,7 +211,7 @@ class ADMMSolver:
         Vi = V0 if V_init is None else np.asarray(V_init, dtype=np.float64)
         used = np.zeros(topo.n_vertices, bool)
         used[self.F.ravel()] = True
-        center = Vi[used].mean(axis=0)
+        center = (Vi if used.all() else Vi[used]).mean(axis=0)  # (same rows, same sums)
         scale = float(_k.edge_lengths(Vi, topo.edges).mean())
         if not scale > 0:
             from meshrepair.errors import MeshRepairError
