@@ -14,18 +14,17 @@ from meshrepair.denoise.rules import CAD_SUPPORT, TANGENTIAL_MAX, lambda_from_no
 from .conftest import shared_mesh
 
 
-def test_lambda_is_the_default_law_and_capped_only_on_low_passed_data():
-    """For noise along the normals λ = max(0.02/γ̂², 0.05) is :func:`lambda_from_noise`; the
-    tangential constant doubles it; on a low-passed input (``graded=False``) it is at most
-    LOWPASSED_LAMBDA_MAX; monotone non-increasing in γ̂."""
-    g1 = np.sqrt(of.LAMBDA_SCALE)
-    for g in (0.01, 0.05, 0.1, g1, 0.2, 0.3, 0.5, 1.0, 0.0, float("nan")):
-        assert of.organic_lambda(g) == pytest.approx(lambda_from_noise(g))
-    assert of.organic_lambda(g1) == pytest.approx(1.0)
-    assert of.organic_lambda(0.1) == pytest.approx(2.0)
-    assert of.organic_lambda(0.1, TANGENTIAL_MAX) == pytest.approx(4.0)
-    assert of.organic_lambda(0.1, TANGENTIAL_MAX - 1e-9) == pytest.approx(2.0)
-    assert of.organic_lambda(0.01) == pytest.approx(200.0)
+def test_lambda_is_twice_the_default_law_and_capped_only_on_low_passed_data():
+    """For noise along the normals λ = max(0.04/γ̂², 0.05), twice :func:`lambda_from_noise`
+    where neither floor acts; the tangential constant doubles it; on a low-passed input
+    (``graded=False``) it is at most LOWPASSED_LAMBDA_MAX; monotone non-increasing in γ̂."""
+    for g in (0.01, 0.05, 0.1, 0.2, 0.3, 0.5, 0.0, float("nan")):
+        assert of.organic_lambda(g) == pytest.approx(2.0 * lambda_from_noise(g))
+    assert of.organic_lambda(np.sqrt(of.LAMBDA_SCALE)) == pytest.approx(1.0)
+    assert of.organic_lambda(0.1) == pytest.approx(4.0)
+    assert of.organic_lambda(0.1, TANGENTIAL_MAX) == pytest.approx(8.0)
+    assert of.organic_lambda(0.1, TANGENTIAL_MAX - 1e-9) == pytest.approx(4.0)
+    assert of.organic_lambda(0.01) == pytest.approx(400.0)
     assert of.organic_lambda(0.01, graded=False) == of.LOWPASSED_LAMBDA_MAX
     assert of.organic_lambda(float("nan"), graded=False) == of.LOWPASSED_LAMBDA_MAX
     assert lambda_from_noise(0.01, lowpassed=True) == 1.0

@@ -65,7 +65,7 @@ def _reanchor_smooth(V_in, V_out, F, topo, sup_v, gamma, info):
     from meshrepair.denoise.reproject import reanchor, residual_tangential_ratio
 
     ratio = residual_tangential_ratio(V_out, V_in, F)
-    info["reanchor_ratio"] = ratio  # read at the ungraded data weight
+    info["reanchor_ratio"] = ratio  # as read; the test reads it at the default law's weight
     ratio = reanchor_ratio_at_ungraded(ratio, info.get("lambda_gain", 1.0))
     if not (ratio < REANCHOR_MAX_RATIO) or gamma > HEAVY_NOISE:
         return V_out

@@ -6,20 +6,25 @@
 term ``(λ/2)‖V − V⁰‖²`` is the negative log-likelihood of white Gaussian noise of level ``γ̂``
 (mean edge lengths) up to the prior's scale, so the weight grows as ``1/γ̂²`` (for a quadratic
 prior and a signal whose spectrum is the prior's inverse, ``λ = c/σ²`` is exactly the Wiener
-filter: tests/test_organic_fidelity.py). On meshes that are not CAD parts
+filter: tests/test_organic_fidelity.py). For a prior-matched signal, whose spectrum times
+the prior's symbol is a constant ``K``, the Wiener weight is ``λ = wK/σ²``: the constant of the
+law is the signal's relief against the prior. A CAD part is flat between its creases (small
+``K`` where the prior acts); an organic surface carries relief at every scale, and its data
+deserve the larger weight. On meshes that are not CAD parts
 (crease support below :data:`meshrepair.denoise.rules.CAD_SUPPORT` of the edges), with white
 (Willmore weight 1 and correlation ratio ``ρ <`` :data:`RHO_WHITE`), non-impulsive noise, the
-main run uses the law graded by the noise's direction,
+main run uses
 
 .. math:: λ = \\max(c / γ̂^2,\\; 0.05), \\qquad
-          c = \\begin{cases} 0.02 & r_t < 0.65 \\\\ 0.04 & r_t \\ge 0.65, \\end{cases}
+          c = \\begin{cases} 0.04 & r_t < 0.65 \\\\ 0.08 & r_t \\ge 0.65, \\end{cases}
 
-(:func:`organic_lambda`), which for noise along the normals is the default. ``γ̂`` is a
+(:func:`organic_lambda`), twice the default for noise along the normals (``c = 0.04``
+chosen on the design half of the benchmark grid). ``γ̂`` is a
 level of the offsets *along the normals*; noise with a tangential part
 (``r_t ≥`` :data:`meshrepair.denoise.rules.TANGENTIAL_MAX`,
 :func:`meshrepair.denoise.scale.tangential_ratio`) puts part of its variance where the prior does
 not act (the tangential layout), so the normal level under-reads the noise the data term
-sees; the constant doubles there (``c = 0.04``, chosen on the benchmark grid). The robust probe
+sees; the constant doubles there (``c = 0.08``). The robust probe
 that decides the crease support keeps the default: its decisions do not change.
 Correlated noise that the Willmore rule misses (it reads ``r_t ≥ 0.65``) reads ``ρ ≥ 1.42``
 on the benchmark grid, white noise ``ρ ≤ 1.36``: hence :data:`RHO_WHITE` = 1.4 between them (a
@@ -40,7 +45,7 @@ grows with ``r_t`` there. The law of the main run, for ``r_t ≥ 0.65``,
           g(r_t) = \\tfrac12 \\bigl(1 + \\max(r_t, 1)^2\\bigr),
 
 is the ungraded law for ``r_t ≤ 1`` (``g = 1``) and multiplies its constant by
-``(1 + r_t²)/2`` above (``g c = 0.02 (1 + r_t²)``: the normal constant times the ratio of the
+``(1 + r_t²)/2`` above (``g c = 0.04 (1 + r_t²)``: the normal constant times the ratio of the
 total to the normal part of the residual as ``r_t`` measures them), for ``r_t`` up to
 :data:`GAIN_RATIO_MAX` = 2.5 (above it ``g = 1``: not a measurement). The run on a low-passed
 input (:mod:`meshrepair.denoise.presmooth`) keeps ``g = 1`` and caps λ at
@@ -64,8 +69,8 @@ from __future__ import annotations
 import numpy as np
 
 ORGANIC_FIDELITY = True
-LAMBDA_SCALE = 0.02
-LAMBDA_SCALE_TANGENTIAL = 0.04
+LAMBDA_SCALE = 0.04
+LAMBDA_SCALE_TANGENTIAL = 0.08
 LOWPASSED_LAMBDA_MAX = 8.0
 """Largest λ of this law on a low-passed input (the coarse-to-fine run): the residual
 roughness γ̂ read there measures the noise left, not the filter's bias."""
@@ -79,8 +84,8 @@ collapsed result) and the gain is 1."""
 
 def organic_lambda(gamma: float, tangential: float = 0.0, *, graded: bool = True) -> float:
     """``λ = max(g c / max(γ̂, γ_0)², 0.05)`` (module docstring); ``γ̂`` in mean edge lengths,
-    ``γ_0`` = :data:`meshrepair.denoise.rules.GAMMA_FLOOR`, ``c = 0.02`` for noise along the
-    normals (``r_t < 0.65``), ``c = 0.04`` otherwise.
+    ``γ_0`` = :data:`meshrepair.denoise.rules.GAMMA_FLOOR`, ``c = 0.04`` for noise along the
+    normals (``r_t < 0.65``), ``c = 0.08`` otherwise.
 
     ``graded`` (:func:`tangential_gain`): for ``r_t ≥ 0.65`` ``c`` is multiplied by
     ``g(r_t) = (1 + max(r_t, 1)²) / 2`` (1 for ``r_t ≤ 1``: the ungraded law there). The run on
@@ -113,22 +118,32 @@ def tangential_gain(tangential: float) -> float:
 
 
 def main_lambda(gamma: float, tangential: float, info: dict, *, graded: bool = True) -> float:
-    """:func:`organic_lambda` for the main run of :func:`meshrepair.denoise`; records
-    the gain ``g`` it used in ``info["lambda_gain"]`` (1 when ``graded`` is off), which the
-    re-anchoring's direction test reads (:func:`reanchor_ratio_at_ungraded`)."""
-    info["lambda_gain"] = tangential_gain(tangential) if graded else 1.0
+    """:func:`organic_lambda` for the main run of :func:`meshrepair.denoise`; records in
+    ``info["lambda_gain"]`` the factor the re-anchoring's direction test corrects for
+    (:func:`reanchor_ratio_at_ungraded`): for noise with a tangential part (``r_t ≥``
+    :data:`meshrepair.denoise.rules.TANGENTIAL_MAX`), where a raised weight makes the residual
+    read falsely "along the normals", ``g c / c_d``, the raise over the constant ``c_d`` =
+    :data:`meshrepair.denoise.rules.LAMBDA_SCALE` of the default law; 1 for noise along the
+    normals (re-anchoring is meant for it) and when ``graded`` is off (the run on a low-passed
+    input, whose λ is capped)."""
+    from meshrepair.denoise.rules import LAMBDA_SCALE as C_DEFAULT
+    from meshrepair.denoise.rules import TANGENTIAL_MAX
+
+    info["lambda_gain"] = (tangential_gain(tangential) * LAMBDA_SCALE / C_DEFAULT
+                           if graded and tangential >= TANGENTIAL_MAX else 1.0)
     return organic_lambda(gamma, tangential, graded=graded)
 
 
 def reanchor_ratio_at_ungraded(ratio: float, gain: float) -> float:
     """The re-anchoring's residual tangential ratio ``ρ_t`` (:func:`meshrepair.denoise.reproject
-    .residual_tangential_ratio`) read at the ungraded data weight: ``ρ_t √g``. A data weight
-    raised by ``g`` keeps the solve's result nearer the input, whose tangential offsets the
+    .residual_tangential_ratio`) read at the default law's data weight: ``ρ_t √g``, ``g`` the
+    factor of :func:`main_lambda` (``info["lambda_gain"]``). A data weight raised by ``g`` keeps
+    the solve's result nearer the input, whose tangential offsets the
     prior does not remove, so the tangential part of the residual shrinks against its normal
     part by about ``1/√g``: the residual then reads "along the normals" for noise that is not,
     and the re-anchoring would slide the vertices towards the input's noisy tangential
-    positions. ``√g`` undoes that shrinkage, so the re-anchoring decides as at the ungraded
-    weight."""
+    positions. ``√g`` undoes that shrinkage, so the re-anchoring decides as at the default
+    law's weight."""
     return float(ratio) * float(np.sqrt(max(float(gain), 1.0)))
 
 
