@@ -125,6 +125,26 @@ def test_fold_zone_is_fixed_and_the_rest_is_filtered():
     assert not locally_flipped_faces(Z, topo).any()
 
 
+def test_normal_step_is_the_full_step_projected_on_the_start_normals():
+    """``normal``: the k full pairs' displacement, projected on the normals of the surface the
+    pairs start from (no tangential motion; a smooth sphere under radial noise gets closer to
+    the sphere)."""
+    from meshrepair.denoise.lowpass import taubin_region
+    from meshrepair.mesh.geometry import vertex_normals
+
+    V, F, e = _sphere(3)
+    topo = edge_topology(F, len(V))
+    X = V * (1 + 0.01 * np.random.default_rng(5).standard_normal(len(V)))[:, None]
+    Y = co.coarse_lowpass(X, F, topo, 6, normal=True, unfold=False)
+    n = vertex_normals(X, F)
+    d = Y - X
+    assert np.allclose(np.cross(d, n), 0.0, atol=1e-12)
+    full = taubin_region(X, e, np.ones(len(X), bool), 6)
+    assert np.allclose(np.einsum("ij,ij->i", d, n), np.einsum("ij,ij->i", full - X, n))
+    err = [float(np.abs(np.linalg.norm(Z, axis=1) - 1).mean()) for Z in (X, Y)]
+    assert err[1] < 0.5 * err[0]
+
+
 def test_defaults_record_the_read():
     V, F, _ = _sphere(3)
     Vn = add_noise(V, F, 0.2, direction="normal", seed=3)

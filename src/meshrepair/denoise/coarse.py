@@ -55,12 +55,16 @@ the model's result is already better than any ``T^k y``, and a further ``T^k`` o
 removes relief, while ``R(k)`` (a risk of the filter on the input, not of ``T^k X``) still has
 its minimum at a few pairs.
 
-The step is full (tangential too) λ|μ pairs (:func:`meshrepair.denoise.lowpass.taubin_region`)
-on every vertex, after the organic finish (as in :mod:`meshrepair.denoise.presmooth`, the
-probe's short "crease" chains on an organic mesh are noise, so none is kept fixed), and the
-result is resampled at the input's vertex layout (:mod:`meshrepair.denoise.layoutkeep`). A
-step projected on the vertex normals instead degrades beyond a pair or two: the normals of the
-partly filtered surface steer each later step.
+The step is ``k`` full λ|μ pairs (:func:`meshrepair.denoise.lowpass.taubin_region`) on every
+vertex, after the organic finish (as in :mod:`meshrepair.denoise.presmooth`, the probe's short
+"crease" chains on an organic mesh are noise, so none is kept fixed). When the noise lies along
+the normals at a low level (``r_t < 0.65`` and ``γ̂ ≤ 0.13``, the gates of
+:mod:`meshrepair.denoise.lowpass`; :func:`normal_only`) the input's tangential layout is exact
+and the solve left no drift: the pairs' total displacement is then projected on the vertex
+normals of the surface they start from, so the vertex error E_V does not grow. (Projecting each
+pair's step on the normals of the current surface instead degrades beyond a pair or two: the
+normals of the partly filtered surface steer each later step.) Otherwise the filtered surface is
+resampled at the input's vertex layout (:mod:`meshrepair.denoise.layoutkeep`).
 """
 
 from __future__ import annotations
@@ -128,6 +132,16 @@ def coarse_steps(V: np.ndarray, F: np.ndarray, edges: np.ndarray, roughness: flo
     return max(0, k - int(before))
 
 
+def normal_only(tangential: float, gamma: float) -> bool:
+    """Noise along the normals (``r_t < 0.65``) at a low level (``γ̂ ≤ 0.13``): the low-pass's
+    displacement is projected on the vertex normals (:func:`coarse_lowpass`)."""
+    from meshrepair.denoise.lowpass import TANGENTIAL_GAMMA
+    from meshrepair.denoise.rules import TANGENTIAL_MAX
+
+    return bool(np.isfinite(tangential) and tangential < TANGENTIAL_MAX
+                and gamma <= TANGENTIAL_GAMMA)
+
+
 FOLD_RINGS = 2
 
 
@@ -152,8 +166,9 @@ def coarse_lowpass(V: np.ndarray, F: np.ndarray, topo, steps: int, *, normal: bo
                    unfold: bool = True, reference: np.ndarray | None = None,
                    layout: np.ndarray | None = None,
                    tangential: float = float("nan")) -> np.ndarray:
-    """``steps`` λ|μ pairs of :func:`meshrepair.denoise.lowpass.taubin_region` (projected on the
-    vertex normals when ``normal``); a new array.
+    """``steps`` full λ|μ pairs of :func:`meshrepair.denoise.lowpass.taubin_region`; with
+    ``normal`` their total displacement ``d_i`` is then projected on the vertex normals ``n_i``
+    of the surface they start from, ``X_i = V_i + (n_i·d_i) n_i``; a new array.
 
     With ``unfold`` the faces folded in ``V`` are first unfolded
     (:func:`meshrepair.denoise.folds.unfold_result`, which ``denoise`` runs after the finish
@@ -176,5 +191,10 @@ def coarse_lowpass(V: np.ndarray, F: np.ndarray, topo, steps: int, *, normal: bo
         free = np.ones(len(V), bool)
     else:
         free = free_vertices(V, F, topo)
-    X = taubin_region(V, topo.edges, free, int(steps), F=F if normal else None)
-    return X if normal else keep_layout(X, layout, F, topo.edges, tangential, free)
+    X = taubin_region(V, topo.edges, free, int(steps))
+    if normal:
+        from meshrepair.mesh.geometry import vertex_normals
+
+        n = vertex_normals(V, F)
+        return V + np.einsum("ij,ij->i", X - V, n)[:, None] * n
+    return keep_layout(X, layout, F, topo.edges, tangential, free)

@@ -204,8 +204,9 @@ def finish_result(V, V_out, F, topo, M_E, *, data, sup_v, gamma, gamma_rms, impu
             info["coarse_roughness"] = c
             kc = _co.coarse_steps(y, F, topo.edges, c, before=kp, **gate)
             if kc:
+                nrm = _co.normal_only(info["tangential_ratio"], gamma)
                 keep = bool(info["reintegrate_steps"]) and not impulsive  # its folds are kept
-                V_out = _co.coarse_lowpass(V_out, F, topo, kc, normal=False, unfold=not keep,
+                V_out = _co.coarse_lowpass(V_out, F, topo, kc, normal=nrm, unfold=not keep,
                                            reference=probe, layout=V,
                                            tangential=info["tangential_ratio"])
                 info["coarse_steps"] = kc
