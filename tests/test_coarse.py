@@ -64,20 +64,39 @@ def test_roughness_invariances_and_range():
     assert np.isnan(co.curvature_roughness(flat * 0.0, F, e, steps=0))
 
 
-def test_steps_rule_and_gate():
+def test_gate():
     kw = dict(support_fraction=0.05, outside=1.0, willmore=1.0, impulsive=False)
-    assert co.coarse_steps(0.27, 0.15, **kw) == round((0.27 / co.GAMMA_C) ** 2)
-    assert co.coarse_steps(0.12, 0.15, **kw) == 4
-    assert co.coarse_steps(0.5, 0.15, **kw) == co.MAX_STEPS
-    assert co.coarse_steps(0.03, 0.15, **kw) == 0  # an input low-passed by presmooth
-    assert co.coarse_steps(0.27, co.C_0, **kw) == 0  # relief at the mesh's scale
-    assert co.coarse_steps(0.27, float("nan"), **kw) == 0
-    assert co.coarse_steps(0.27, 0.15, **{**kw, "impulsive": True}) == 0
-    assert co.coarse_steps(0.27, 0.15, **{**kw, "support_fraction": 0.3}) == 0  # CAD part
-    assert co.coarse_steps(0.27, 0.15, **{**kw, "outside": 6.0}) == 0
-    assert co.coarse_steps(0.27, 0.15, **{**kw, "willmore": 4.0}) == 0  # correlated noise
-    assert co.normal_only(0.3, 0.12) and not co.normal_only(0.3, 0.2)
-    assert not co.normal_only(1.0, 0.1) and not co.normal_only(float("nan"), 0.1)
+    assert co.gated(**kw)
+    assert not co.gated(**{**kw, "impulsive": True})
+    assert not co.gated(**{**kw, "support_fraction": 0.3})  # CAD part
+    assert not co.gated(**{**kw, "outside": 6.0})
+    assert not co.gated(**{**kw, "willmore": 4.0})  # correlated noise
+    assert not co.gated(**{**kw, "lowpassed": True})  # the coarse-to-fine run's input
+
+
+def test_steps_are_the_least_risk_of_the_input_low_pass():
+    """k = argmin R(k) against brute force (each T^k y filtered from y, risk by normal_risk);
+    0 outside the gate or at c ≥ c_0. A smooth sphere under noise wants a long filter."""
+    from meshrepair.denoise import lengthcheck as lc
+    from meshrepair.denoise.presmooth import presmooth
+
+    V, F, e = _sphere(3)
+    ell = float(np.linalg.norm(V[e[:, 0]] - V[e[:, 1]], axis=1).mean())
+    Y = add_noise(V, F, 0.2, direction="normal", seed=4)
+    kw = dict(support_fraction=0.05, outside=1.0, willmore=1.0, impulsive=False)
+    k = co.coarse_steps(Y, F, e, 0.15, **kw)
+    s = lc.normal_level(Y, F, e)
+    free = np.ones(len(Y), bool)
+    brute = [lc.normal_risk(Y, presmooth(Y, e, free, j), F, e, j, s)
+             for j in range(co.MAX_STEPS + 1)]
+    assert k == int(np.argmin(brute)) and k > 5
+    assert s == pytest.approx(0.2 * ell, rel=0.1)
+    # the coarse-to-fine run: k_p pairs already applied, the rest of the least-risk length
+    assert co.coarse_steps(Y, F, e, 0.15, before=3, **kw) == k - 3
+    assert co.coarse_steps(Y, F, e, 0.15, before=co.MAX_STEPS, **kw) == 0
+    assert co.coarse_steps(Y, F, e, co.C_0, **kw) == 0  # relief at the mesh's scale
+    assert co.coarse_steps(Y, F, e, float("nan"), **kw) == 0
+    assert co.coarse_steps(Y, F, e, 0.15, **{**kw, "impulsive": True}) == 0
 
 
 def test_fold_zone_is_fixed_and_the_rest_is_filtered():
@@ -104,6 +123,26 @@ def test_fold_zone_is_fixed_and_the_rest_is_filtered():
     assert np.array_equal(Y[fixed], X[fixed]) and not np.allclose(Y[free], X[free])
     Z = co.coarse_lowpass(X, F, topo, 2, normal=False, unfold=True)
     assert not locally_flipped_faces(Z, topo).any()
+
+
+def test_normal_step_is_the_full_step_projected_on_the_start_normals():
+    """``normal``: the k full pairs' displacement, projected on the normals of the surface the
+    pairs start from (no tangential motion; a smooth sphere under radial noise gets closer to
+    the sphere)."""
+    from meshrepair.denoise.lowpass import taubin_region
+    from meshrepair.mesh.geometry import vertex_normals
+
+    V, F, e = _sphere(3)
+    topo = edge_topology(F, len(V))
+    X = V * (1 + 0.01 * np.random.default_rng(5).standard_normal(len(V)))[:, None]
+    Y = co.coarse_lowpass(X, F, topo, 6, normal=True, unfold=False)
+    n = vertex_normals(X, F)
+    d = Y - X
+    assert np.allclose(np.cross(d, n), 0.0, atol=1e-12)
+    full = taubin_region(X, e, np.ones(len(X), bool), 6)
+    assert np.allclose(np.einsum("ij,ij->i", d, n), np.einsum("ij,ij->i", full - X, n))
+    err = [float(np.abs(np.linalg.norm(Z, axis=1) - 1).mean()) for Z in (X, Y)]
+    assert err[1] < 0.5 * err[0]
 
 
 def test_defaults_record_the_read():

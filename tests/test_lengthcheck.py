@@ -65,6 +65,21 @@ def test_risk_estimates_the_normal_error_up_to_its_constant():
     assert np.sign(est[30] - est[3]) == np.sign(true[30] - true[3])
 
 
+def test_risk_curve_is_the_risk_of_each_length():
+    """``risk_curve`` against ``normal_risk`` of each ``T^k y`` filtered from ``y`` (brute
+    force), and the analytic ``k = 0`` value: no residual and ``tr I = n`` exactly (a
+    Rademacher probe has ``z_i² = 1``), so ``R(0) = 2nσ²``."""
+    V, F, E, ell = _sphere(sub=3, bumps=0.02)
+    Y = _noisy(V, F, 0.2 * ell, seed=5)
+    s = lc.normal_level(Y, F, E)
+    free = np.ones(len(V), bool)
+    curve = lc.risk_curve(Y, F, E, 12)
+    brute = [lc.normal_risk(Y, presmooth(Y, E, free, k), F, E, k, s) for k in range(13)]
+    assert curve == pytest.approx(brute, rel=1e-9)
+    assert curve[0] == pytest.approx(2 * len(V) * s * s, rel=1e-12)
+    assert lc.risk_curve(Y, F, E, 3, sigma=2 * s)[0] == pytest.approx(8 * len(V) * s * s)
+
+
 def test_check_keeps_the_length_the_truth_prefers(monkeypatch):
     """A smooth sphere under heavy noise wants the long filter; a sphere with relief at the
     mesh's scale under light noise the short one: the check picks each (the truth agrees)."""

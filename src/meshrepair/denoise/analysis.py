@@ -353,6 +353,9 @@ def _plan_presmooth(V, F, st: _State, options: dict, *, capped_run: bool, dec: l
                   willmore_weight=None, regions=o["regions"], polish=False,
                   presmoothed=True, read_from=Vread, capped=kc < kp0,
                   digest=bool(st.mesh_key))
+    for q in (inner, inner.if_correlated):  # the raw input, for the final low-pass
+        if q is not None and q._state is not None:
+            q._state.lowpassed_from = (V, int(kp))
     st.presmooth = {"Vp": Vp, "steps": int(kp), "roughness": hc, "tangential_weight": hw,
                     "risk_difference": hd}
     dec.append(Decision("presmooth_steps", int(kp), "presmooth_steps → capped_steps → "

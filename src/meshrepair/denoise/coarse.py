@@ -1,4 +1,4 @@
-"""A longer low-pass where the surface is smooth at the mesh's resolution .
+"""A longer low-pass where the surface is smooth at the mesh's resolution.
 
 On an organic mesh with white noise the defaults end with a short low-pass
 (:mod:`meshrepair.denoise.lowpass`, ``k = round((γ̂/0.13)²)`` pairs) because a longer one smooths
@@ -25,35 +25,56 @@ smoothed, while after the ``m`` pairs it reads within about ±0.02 of the clean 
 value (after the same pairs) across noise levels; smooth surfaces read about 0.16-0.18,
 scanned relief 0.2-0.35.
 
-**The rule** (:func:`coarse_steps`): on an organic mesh (crease support below
+**The gate** (:func:`gated`): an organic mesh (crease support below
 :data:`meshrepair.denoise.rules.CAD_SUPPORT`, outside weight 1) with white, non-impulsive noise
-(Willmore weight 1), when ``c < c_0 = 0.185``:
+(Willmore weight 1), λ and the Willmore weight read from the input (not set by the user), the
+raw input at hand, and ``c < c_0 = 0.185`` (chosen on the benchmark grid, docs/parameters.md).
+In the coarse-to-fine run (:mod:`meshrepair.denoise.presmooth`) the noise model is the raw
+input's (white, non-impulsive: that run's own gate), not the reading of the filtered noise of
+the low-passed input, and the risk below is read on the raw input.
 
-.. math:: k = \\mathrm{clip}\\bigl(\\mathrm{round}((γ̂/γ_c)^2), 0, K_{max}\\bigr),
-          \\qquad γ_c = 0.06,\\ K_{max} = 24,
+**The length** (:func:`coarse_steps`) is the one whose low-pass of the *input* has the least
+estimated risk: with ``T`` one λ|μ pair, ``y`` the input and ``R(k)`` Stein's unbiased risk
+estimate of ``T^k y`` along the normals (:func:`meshrepair.denoise.lengthcheck.risk_curve`,
+the noise level σ̂ read there by one pair),
 
-full (tangential too) Taubin λ|μ pairs (:func:`meshrepair.denoise.lowpass.taubin_region`) on every
+.. math:: k = \\arg\\min_{0 \\le k \\le K_{max}} R(k),
+          \\qquad R(k) = \\sum_i \\bigl(n_i\\cdot(y - T^k y)_i\\bigr)^2
+          + 2σ̂^2\\,\\mathrm{tr}\\,T^k, \\qquad K_{max} = 40.
+
+The model's result ``X`` is then filtered by the same ``k`` pairs, ``T^k X``. In the
+coarse-to-fine run (:mod:`meshrepair.denoise.presmooth`) the model ran on ``T^{k_p} y``: the risk
+is read on the raw input ``y`` and the result gets ``max(0, k − k_p)`` pairs, so the two
+low-passes together are ``T^k`` (the λ|μ pairs commute). Where the surface is smooth at the
+mesh's resolution the linear filter at its best length is close to the best
+estimate of the surface, and the model's result keeps part of the noise's mid frequencies
+(bumps of a few rings) that the filter removes: the filter's length is then set by the noise
+level *and* by how much shape the surface has at that length, which ``R(k)`` reads from the
+input and which a rule in γ̂ alone does not. The gate ``c < c_0`` is needed: on scanned relief
+the model's result is already better than any ``T^k y``, and a further ``T^k`` on it only
+removes relief, while ``R(k)`` (a risk of the filter on the input, not of ``T^k X``) still has
+its minimum at a few pairs.
+
+The step is ``k`` full λ|μ pairs (:func:`meshrepair.denoise.lowpass.taubin_region`) on every
 vertex, after the organic finish (as in :mod:`meshrepair.denoise.presmooth`, the probe's short
-"crease" chains on an organic mesh are noise, so none is kept fixed). The width √k ∝ γ̂ as in
-:mod:`meshrepair.denoise.lowpass`; ``γ_c`` and ``c_0`` were chosen on the benchmark grid
-(docs/parameters.md). The step is projected on the vertex normals (:func:`normal_only`) when
-the noise lies along the normals at a low level (``r_t < 0.65`` and ``γ̂ ≤ 0.13``, the gates of
-:mod:`meshrepair.denoise.lowpass`): the input's tangential layout is then exact and the solve
-left no drift, so the vertex error E_V does not grow.
-
-On the low-passed input of the coarse-to-fine run (:mod:`meshrepair.denoise.presmooth`) γ̂ reads
-0.03-0.06, so ``k`` is 0 or 1 there.
+"crease" chains on an organic mesh are noise, so none is kept fixed). When the noise lies along
+the normals at a low level (``r_t < 0.65`` and ``γ̂ ≤ 0.13``, the gates of
+:mod:`meshrepair.denoise.lowpass`; :func:`normal_only`) the input's tangential layout is exact
+and the solve left no drift: the pairs' total displacement is then projected on the vertex
+normals of the surface they start from, so the vertex error E_V does not grow. (Projecting each
+pair's step on the normals of the current surface instead degrades beyond a pair or two: the
+normals of the partly filtered surface steer each later step.) Otherwise the filtered surface is
+resampled at the input's vertex layout (:mod:`meshrepair.denoise.layoutkeep`).
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-COARSE = True
-C_0 = 0.185
-READ_STEPS = 8
-GAMMA_C = 0.06
-MAX_STEPS = 24
+COARSE = True  # switch of the low-pass
+C_0 = 0.185  # c_0: curvature variation below which the surface is smooth at its resolution
+READ_STEPS = 8  # m: λ|μ pairs applied before the read of c
+MAX_STEPS = 40  # K_max: the longest low-pass the risk is read for
 
 
 def curvature_roughness(V: np.ndarray, F: np.ndarray, edges: np.ndarray, *,
@@ -87,29 +108,38 @@ def curvature_roughness(V: np.ndarray, F: np.ndarray, edges: np.ndarray, *,
     return float(np.linalg.norm(h - W @ (W @ h)) / den)
 
 
-def coarse_steps(gamma: float, roughness: float, *, support_fraction: float, outside: float,
-                 willmore: float, impulsive: bool) -> int:
-    """λ|μ pairs ``k`` of the module docstring; 0 when the gate does not fire."""
+def gated(*, support_fraction: float, outside: float, willmore: float, impulsive: bool,
+          lowpassed: bool = False) -> bool:
+    """The gate of the module docstring without the read ``c``: an organic mesh with white,
+    non-impulsive noise, and the raw input at hand (not ``lowpassed`` without it)."""
     from meshrepair.denoise.rules import CAD_SUPPORT
 
-    if not COARSE or impulsive or outside != 1.0 or willmore != 1.0:
+    if not COARSE or impulsive or lowpassed or outside != 1.0 or willmore != 1.0:
+        return False
+    return bool(support_fraction < CAD_SUPPORT)
+
+
+def coarse_steps(V: np.ndarray, F: np.ndarray, edges: np.ndarray, roughness: float, *,
+                 before: int = 0, **gate) -> int:
+    """λ|μ pairs ``k`` of the module docstring: the least risk of ``T^k V`` on the raw input
+    ``V`` less the ``before`` pairs already applied to it (``k_p``); 0 when the gate
+    (:func:`gated` with the keywords ``gate``, and ``c < c_0``) does not fire."""
+    from meshrepair.denoise.lengthcheck import risk_curve
+
+    if not gated(**gate) or not (np.isfinite(roughness) and roughness < C_0):
         return 0
-    if not (support_fraction < CAD_SUPPORT) or not np.isfinite(gamma):
-        return 0
-    if not (np.isfinite(roughness) and roughness < C_0):
-        return 0
-    return int(np.clip(round((float(gamma) / GAMMA_C) ** 2), 0, MAX_STEPS))
+    k = int(np.argmin(risk_curve(V, F, edges, MAX_STEPS + int(before))))
+    return max(0, k - int(before))
 
 
 def normal_only(tangential: float, gamma: float) -> bool:
-    """Noise along the normals (``r_t < 0.65``) at a low level (``γ̂ ≤ 0.13``): the step of
-    :func:`meshrepair.denoise.lowpass.taubin_region` is projected on the vertex normals."""
+    """Noise along the normals (``r_t < 0.65``) at a low level (``γ̂ ≤ 0.13``): the low-pass's
+    displacement is projected on the vertex normals (:func:`coarse_lowpass`)."""
     from meshrepair.denoise.lowpass import TANGENTIAL_GAMMA
     from meshrepair.denoise.rules import TANGENTIAL_MAX
 
     return bool(np.isfinite(tangential) and tangential < TANGENTIAL_MAX
                 and gamma <= TANGENTIAL_GAMMA)
-
 
 
 FOLD_RINGS = 2
@@ -136,8 +166,9 @@ def coarse_lowpass(V: np.ndarray, F: np.ndarray, topo, steps: int, *, normal: bo
                    unfold: bool = True, reference: np.ndarray | None = None,
                    layout: np.ndarray | None = None,
                    tangential: float = float("nan")) -> np.ndarray:
-    """``steps`` λ|μ pairs of :func:`meshrepair.denoise.lowpass.taubin_region` (projected on the
-    vertex normals when ``normal``); a new array.
+    """``steps`` full λ|μ pairs of :func:`meshrepair.denoise.lowpass.taubin_region`; with
+    ``normal`` their total displacement ``d_i`` is then projected on the vertex normals ``n_i``
+    of the surface they start from, ``X_i = V_i + (n_i·d_i) n_i``; a new array.
 
     With ``unfold`` the faces folded in ``V`` are first unfolded
     (:func:`meshrepair.denoise.folds.unfold_result`, which ``denoise`` runs after the finish
@@ -160,5 +191,10 @@ def coarse_lowpass(V: np.ndarray, F: np.ndarray, topo, steps: int, *, normal: bo
         free = np.ones(len(V), bool)
     else:
         free = free_vertices(V, F, topo)
-    X = taubin_region(V, topo.edges, free, int(steps), F=F if normal else None)
-    return X if normal else keep_layout(X, layout, F, topo.edges, tangential, free)
+    X = taubin_region(V, topo.edges, free, int(steps))
+    if normal:
+        from meshrepair.mesh.geometry import vertex_normals
+
+        n = vertex_normals(V, F)
+        return V + np.einsum("ij,ij->i", X - V, n)[:, None] * n
+    return keep_layout(X, layout, F, topo.edges, tangential, free)

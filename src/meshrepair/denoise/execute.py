@@ -155,7 +155,10 @@ def _execute(plan: DenoisePlan, V, F, callback=None, *, made_here: bool = False
     V_out = finish_result(V, V_out, F, topo, M_E, data=Vd[inv] if reorder else Vd,
                           sup_v=sup_v, gamma=gamma, gamma_rms=gamma_rms, impulsive=impulsive,
                           ww=ww, w_cad=w_cad, automatic=o["willmore_weight"] is None,
-                          polish=plan.polish, info=info, probe=r1_V)
+                          polish=plan.polish, info=info, probe=r1_V,
+                          lowpassed=st.presmoothed,
+                          lowpassed_from=st.lowpassed_from,
+                          lam_set=o["lam"] is not None)
     n_res_folded = 0
     if o["unfold"] and UNFOLD_RESULT and not (info["reintegrate_steps"]
                                               and REINTEGRATE_KEEPS_FOLDS and not impulsive):

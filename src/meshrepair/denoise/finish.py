@@ -13,7 +13,8 @@ own (they appear in ``DenoiseResult.plan.after_solve``), in this order:
 4. *organic finish*: one-ring guidance, then the re-integration from the input
    (:mod:`meshrepair.denoise.organic`, :func:`~meshrepair.denoise.rules.guidance_rule`,
    :func:`~meshrepair.denoise.rules.reintegrate_rule`);
-4b. *longer low-pass* where the result is smooth at the mesh's resolution
+4b. *longer low-pass* where the result is smooth at the mesh's resolution, its length the one
+   of least estimated risk (SURE) of the same low-pass on the input
    (:mod:`meshrepair.denoise.coarse`);
 5. *CAD finish*: the one-ring guidance on CAD parts (:mod:`meshrepair.denoise.cadfinish`);
 6. *crease sharpening* for correlated noise (:func:`~meshrepair.denoise.rules.sharpen_rule`,
@@ -132,7 +133,8 @@ def _organic_finish(V_in, V_out, F, topo, M_E, gamma, impulsive, ww, info):
 
 
 def finish_result(V, V_out, F, topo, M_E, *, data, sup_v, gamma, gamma_rms, impulsive, ww,
-                  w_cad, automatic, polish, info, probe=None):
+                  w_cad, automatic, polish, info, probe=None,
+                  lowpassed=False, lowpassed_from=None, lam_set=False):
     """Steps 1-6 of the module docstring on the solve's result ``V_out`` (input order).
 
     Parameters
@@ -148,6 +150,9 @@ def finish_result(V, V_out, F, topo, M_E, *, data, sup_v, gamma, gamma_rms, impu
     info : dict, the decisions so far; updated in place with each step's
     probe : (nV, 3) float64 or None, the robust probe's result (the reference of the unfolding
         of the result, :func:`meshrepair.denoise.folds.unfold_result`)
+    lowpassed : ``V`` is the low-passed input ``T^{k_p} y`` of the coarse-to-fine run
+    lowpassed_from : ``(y, k_p)`` of that run, or None (no coarse low-pass on a low-passed ``V``)
+    lam_set : the user set λ (no coarse low-pass: its length would override that fidelity)
 
     Returns
     -------
@@ -185,15 +190,19 @@ def finish_result(V, V_out, F, topo, M_E, *, data, sup_v, gamma, gamma_rms, impu
     if sup_v is not None and automatic:  # organic finish
         V_out = _organic_finish(V, V_out, F, topo, M_E, gamma, impulsive, ww, info)
     info.update(coarse_roughness=float("nan"), coarse_steps=0)
-    if sup_v is not None and automatic:  # smooth at the mesh's resolution
+    if sup_v is not None and automatic and not lam_set:  # smooth at the mesh's resolution
         from meshrepair.denoise import coarse as _co
 
+        y, kp = (V, 0) if not lowpassed else (lowpassed_from or (None, 0))
+        # a low-passed input reads white, non-impulsive noise on the raw input (the
+        # coarse-to-fine gate), whatever its own reading of the filtered noise says
         gate = dict(support_fraction=info["support_fraction"], outside=info["outside_weight"],
-                    willmore=ww, impulsive=impulsive)
-        if _co.coarse_steps(gamma, 0.0, **gate):
+                    willmore=1.0 if lowpassed else ww, impulsive=impulsive and not lowpassed,
+                    lowpassed=y is None)
+        if _co.gated(**gate):
             c = _co.curvature_roughness(V_out, F, topo.edges)
             info["coarse_roughness"] = c
-            kc = _co.coarse_steps(gamma, c, **gate)
+            kc = _co.coarse_steps(y, F, topo.edges, c, before=kp, **gate)
             if kc:
                 nrm = _co.normal_only(info["tangential_ratio"], gamma)
                 keep = bool(info["reintegrate_steps"]) and not impulsive  # its folds are kept

@@ -109,6 +109,41 @@ def normal_risk(V: np.ndarray, X: np.ndarray, F: np.ndarray, edges: np.ndarray, 
     return float(rn @ rn) + 2.0 * float(sigma) ** 2 * tr
 
 
+def risk_curve(V: np.ndarray, F: np.ndarray, edges: np.ndarray, max_steps: int,
+               sigma: float | None = None) -> np.ndarray:
+    """``R(k)`` of the module docstring for every ``k = 0 … max_steps`` (``R(k)`` equals
+    :func:`normal_risk` of ``T^k V``), the pairs applied one after the other to ``V`` and to
+    the probe ``Z``.
+
+    Parameters
+    ----------
+    V : (nV, 3) float64, the input ``y``
+    F : (nF, 3) int64
+    edges : (nE, 2) int64
+    max_steps : the largest ``k``
+    sigma : ``σ`` (input units); :func:`normal_level` of ``V`` when None
+
+    Returns
+    -------
+    (max_steps + 1,) float64
+    """
+    from meshrepair.denoise.presmooth import presmooth
+    from meshrepair.mesh.geometry import vertex_normals
+
+    V = np.asarray(V, dtype=np.float64)
+    s2 = float(normal_level(V, F, edges) if sigma is None else sigma) ** 2
+    free = np.ones(len(V), bool)
+    X, Z = V, _probe(len(V))
+    SZ = Z
+    out = np.empty(int(max_steps) + 1)
+    for k in range(int(max_steps) + 1):
+        if k:
+            X, SZ = presmooth(X, edges, free, 1), presmooth(SZ, edges, free, 1)
+        rn = np.einsum("ij,ij->i", V - X, vertex_normals(X, F))
+        out[k] = float(rn @ rn) + 2.0 * s2 * float((Z * SZ).sum()) / 3.0
+    return out
+
+
 def keep_shorter(V: np.ndarray, F: np.ndarray, edges: np.ndarray, X_short: np.ndarray,
                  k_short: int, X_long: np.ndarray, k_long: int) -> tuple[bool, float]:
     """Whether ``T^{k'} V`` has no larger risk than ``T^k V`` (``R(k') ≤ R(k)``).

@@ -185,6 +185,7 @@ class _State:
     mesh_key: str = ""
     presmooth: dict | None = None
     first_probe: Any = None
+    lowpassed_from: Any = None  # (raw input y, pairs k_p) of a coarse-to-fine run's input
 
 
 def mesh_key(V: np.ndarray, F: np.ndarray) -> str:
