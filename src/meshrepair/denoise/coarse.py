@@ -149,14 +149,14 @@ def free_vertices(V: np.ndarray, F: np.ndarray, topo, rings: int = FOLD_RINGS) -
     """The vertices the low-pass may move: all but those of faces still folded in ``V``
     (:func:`meshrepair.model.relax.locally_flipped_faces`) and ``rings`` rings around them (an
     umbrella step across a fold spreads it)."""
-    from meshrepair.mesh.topology import vertex_adjacency
+    from meshrepair.mesh.topology import adjacency
     from meshrepair.model.relax import locally_flipped_faces
 
     folded = locally_flipped_faces(V, topo)
     fixed = np.zeros(len(V), bool)
     if folded.any():
         fixed[np.asarray(F)[folded].ravel()] = True
-        A = vertex_adjacency(topo.edges, len(V))
+        A = adjacency(topo)
         for _ in range(int(rings)):
             fixed = fixed | (A @ fixed.astype(np.float64) > 0)
     return ~fixed

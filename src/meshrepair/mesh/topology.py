@@ -132,14 +132,7 @@ def mask_key(mask: np.ndarray) -> bytes:
 def adjacency(topo: Topology) -> sp.csr_matrix:
     """The symmetric 0/1 vertex adjacency of ``topo`` (the matrix of :func:`vertex_adjacency`,
     rows sorted), cached."""
-    def build():
-        from meshrepair._kernels import sym_csr
-
-        n = topo.n_vertices
-        indptr, indices = sym_csr(topo.edges[:, 0], topo.edges[:, 1], n)
-        return sp.csr_matrix((np.ones(len(indices)), indices, indptr), shape=(n, n))
-
-    return cached(topo, ("adjacency",), build)
+    return cached(topo, ("adjacency",), lambda: vertex_adjacency(topo.edges, topo.n_vertices))
 
 
 def umbrella_operator(topo: Topology) -> sp.csr_matrix:
@@ -160,13 +153,13 @@ def umbrella_operator(topo: Topology) -> sp.csr_matrix:
 
 
 def vertex_adjacency(edges: np.ndarray, n_vertices: int) -> sp.csr_matrix:
-    """Symmetric 0/1 vertex adjacency matrix, shape ``(nV, nV)``."""
-    i, j = edges[:, 0], edges[:, 1]
-    data = np.ones(2 * len(i))
-    A = sp.coo_matrix((data, (np.r_[i, j], np.r_[j, i])), shape=(n_vertices, n_vertices))
-    A = A.tocsr()
-    A.data[:] = 1.0
-    return A
+    """Symmetric 0/1 vertex adjacency matrix, shape ``(nV, nV)``: canonical CSR (rows sorted,
+    duplicate edges merged), built in one pass (:func:`meshrepair._kernels.sym_csr`)."""
+    from meshrepair._kernels import sym_csr
+
+    n = int(n_vertices)
+    indptr, indices = sym_csr(edges[:, 0], edges[:, 1], n)
+    return sp.csr_matrix((np.ones(len(indices)), indices, indptr), shape=(n, n))
 
 
 def vertex_face_incidence(F: np.ndarray, n_vertices: int) -> sp.csr_matrix:
