@@ -95,6 +95,7 @@ def test_white_noise_read_as_correlated_keeps_the_white_model():
     assert "white-noise test" in str(p)
     r = mr.denoise(Y, F, plan=p)
     assert r.params["noise_model"] == "white"
+    assert r.params["main_solves"] == 1  # the white model's solve only
     assert any(d.name == "noise_model" for d in r.plan.after_solve)
     rc = mr.denoise(Y, F, plan=p.if_correlated)
     assert mr.msae(r.V, V, F) < 0.8 * mr.msae(rc.V, V, F)
@@ -107,6 +108,9 @@ def test_correlated_noise_runs_the_correlated_model():
     assert p.if_correlated is not None
     r = mr.denoise(Y, F, plan=p)
     assert r.params["noise_model"] == "correlated"
+    # the white model's solve, the correlated model's, and its discrepancy re-solve with a lower
+    # outside weight (ratio 1.054): three, one more than issue 26's target of two
+    assert r.params["main_solves"] == 3 and r.params["outside_weight"] == 3.0
     rc = mr.denoise(Y, F, plan=p.if_correlated)
     np.testing.assert_array_equal(r.V, rc.V)
     rw = mr.denoise(Y, F, plan=replace(p, if_correlated=None))  # the white model alone
