@@ -101,17 +101,47 @@ def test_white_noise_read_as_correlated_keeps_the_white_model():
     assert mr.msae(r.V, V, F) < 0.8 * mr.msae(rc.V, V, F)
 
 
-def test_correlated_noise_runs_the_correlated_model():
+def test_correlated_noise_runs_the_correlated_model(monkeypatch):
+    from meshrepair.denoise import discrepancy as dq
+
     V, F = bundled_mesh("fandisk.ply")
     Y = correlated_noise(V, F, 0.4, 3, seed=7)
     p = mr.plan_denoise(Y, F)
     assert p.if_correlated is not None
     r = mr.denoise(Y, F, plan=p)
     assert r.params["noise_model"] == "correlated"
-    # the white model's solve, the correlated model's, and its discrepancy re-solve with a lower
-    # outside weight (ratio 1.054): three, one more than issue 26's target of two
-    assert r.params["main_solves"] == 3 and r.params["outside_weight"] == 3.0
+    # the white model's solve and the correlated model's; the discrepancy principle is read on
+    # the white model's solve (ratio 0.949: accepted), so the correlated model keeps w_out = 6
+    assert r.params["main_solves"] == 2
+    assert r.params["discrepancy_ratio"] == pytest.approx(0.949, abs=0.01)
+    assert r.params["outside_weight"] == p.if_correlated.outside_weight == 6.0
+    monkeypatch.setattr(dq, "FALLBACK_WEIGHTS", ())  # the correlated plan alone at w_out = 6
     rc = mr.denoise(Y, F, plan=p.if_correlated)
     np.testing.assert_array_equal(r.V, rc.V)
+    monkeypatch.undo()
     rw = mr.denoise(Y, F, plan=replace(p, if_correlated=None))  # the white model alone
     assert mr.msae(r.V, V, F) < mr.msae(rw.V, V, F)
+
+
+@pytest.mark.parametrize("white", [True, False])
+def test_a_failed_discrepancy_test_costs_one_solve(monkeypatch, white):
+    """When the discrepancy test on the white model's solve fails, the lowered outside weight is
+    solved once: by the white model again (white residual) or by the correlated model (not
+    white); never a third solve."""
+    from meshrepair.denoise import discrepancy as dq
+    from meshrepair.denoise import whiteness
+
+    V, F = bundled_mesh("fandisk.ply")
+    Y = correlated_noise(V, F, 0.4, 3, seed=7)
+    p = mr.plan_denoise(Y, F)
+    monkeypatch.setattr(dq, "accept_weight", lambda q, tol=dq.DISCREPANCY_TOL: False)
+    if white:
+        real = whiteness.white_residual
+        monkeypatch.setattr(whiteness, "white_residual",
+                            lambda *a, **k: replace(real(*a, **k), white=True))
+    r = mr.denoise(Y, F, plan=p)
+    assert r.params["main_solves"] == 2
+    assert r.params["outside_weight"] == dq.FALLBACK_WEIGHTS[0]
+    assert r.params["noise_model"] == ("white" if white else "correlated")
+    assert r.plan.willmore_weight == (p.willmore_weight if white
+                                      else p.if_correlated.willmore_weight)

@@ -30,11 +30,13 @@ from meshrepair.model.solver import ADMMSolver, SolverOptions
 log = logging.getLogger("meshrepair.denoise.run")
 
 
-def _execute(plan: DenoisePlan, V, F, callback=None, *, made_here: bool = False
-             ) -> DenoiseResult:
+def _execute(plan: DenoisePlan, V, F, callback=None, *, made_here: bool = False,
+             outside: float | None = None, resolve: bool = True) -> DenoiseResult:
     """Run ``plan`` on ``(V, F)`` (the mesh it was made from; module docstring).
     ``made_here``: the plan was just made from these very arrays by the caller, so their
-    digest is not checked again."""
+    digest is not checked again. ``outside``: the outside weight the discrepancy principle
+    already chose on this input (solved with directly, no test); ``resolve=False``: the test
+    is read and recorded but the run is not solved again (the caller decides)."""
     st: _State = plan._state
     if st is None:
         raise MeshRepairError("this plan carries no reading of a mesh (DenoiseResult.plan is a "
@@ -86,6 +88,10 @@ def _execute(plan: DenoisePlan, V, F, callback=None, *, made_here: bool = False
     if st.sup is not None and plan.outside_weight != 1.0:  # a CAD part: its smooth patches
         wedges = np.where(st.sup, ww, ww * plan.outside_weight)  # get the stronger prior
     info["outside_weight"] = plan.outside_weight
+    tested = wedges is not None and outside is None
+    if wedges is not None and outside is not None and outside != plan.outside_weight:
+        wedges = _fallback_edges(st.force, ww, outside)
+        info["outside_weight"] = outside
     Vi_main = st.r1.V if plan.start_from_probe else Vi
     info["start_from_probe"] = bool(plan.start_from_probe)
     stages = plan.stages
@@ -106,18 +112,18 @@ def _execute(plan: DenoisePlan, V, F, callback=None, *, made_here: bool = False
         return res, res.V, res.M_E
 
     res, V_out, M_E = solve(stages)
-    w_cad = info["outside_weight"]  # the CAD-part decision, read by the polish rule
+    w_cad = plan.outside_weight  # the CAD-part decision, read by the polish rule
     info["discrepancy_ratio"] = float("nan")
     from meshrepair.denoise import discrepancy as _dq
 
-    if wedges is not None and _dq.applies(gamma, gamma_rms) and res.stop_reason != "interrupted":
+    if tested and _dq.applies(gamma, gamma_rms) and res.stop_reason != "interrupted":
         # the discrepancy principle on w_out: lower it where it smooths away signal
         q = _dq.discrepancy_ratio(V, V_out, F, sup_v, clip=_dq.CLIP * gamma, edges=topo.edges)
         info["discrepancy_ratio"] = q
-        for w_try in _dq.FALLBACK_WEIGHTS:
+        for w_try in _dq.FALLBACK_WEIGHTS if resolve else ():
             if _dq.accept_weight(q):
                 break
-            wedges = np.where(force < 0, ww, ww * w_try) if w_try != 1.0 else None
+            wedges = _fallback_edges(force, ww, w_try)
             info["outside_weight"] = w_try
             res, V_out, M_E = solve(stages)
             q = _dq.discrepancy_ratio(V, V_out, F, sup_v, clip=_dq.CLIP * gamma,
@@ -191,21 +197,47 @@ def _execute(plan: DenoisePlan, V, F, callback=None, *, made_here: bool = False
     )
 
 
+def _fallback_edges(force, ww: float, w: float):
+    """The per-edge Willmore weights of a lowered outside weight ``w``: ``ww`` on the edges the
+    crease force marks (``force < 0``), ``ww·w`` elsewhere (``None`` for ``w = 1``)."""
+    return np.where(force < 0, ww, ww * w) if w != 1.0 else None
+
+
 def _execute_tested(plan: DenoisePlan, V, F, callback, made_here: bool = False
                     ) -> DenoiseResult:
     """The white model's plan, then the correlated model's when the white result's residual
-    fails the white-noise test (:mod:`meshrepair.denoise.whiteness`)."""
+    fails the white-noise test (:mod:`meshrepair.denoise.whiteness`).
+
+    The discrepancy principle on the outside weight (:mod:`meshrepair.denoise.discrepancy`) is
+    read once, on the white model's first solve: when the residual is white and the test
+    fails, the white model is solved again with the lowered weight; when it is correlated, the
+    correlated model is solved once with the weight that reading chose. A call so runs at most
+    two main solves (three only after a collapse, :data:`COLLAPSE_VOLUME_RATIO`)."""
+    from meshrepair.denoise import discrepancy as _dq
     from meshrepair.denoise.whiteness import white_residual
 
     st: _State = plan._state
-    r = _execute(replace(plan, if_correlated=None), V, F, callback, made_here=made_here)
+    pw = replace(plan, if_correlated=None)
+    r = _execute(pw, V, F, callback, made_here=made_here, resolve=False)
     t = white_residual(V, r.V, F, st.topo.edges, st.gamma)
     log.info("white-noise test of the residual: rho1 %.3f, level %.3f gamma (%s)", t.rho1,
              t.level_ratio, "white" if t.white else "correlated")
     n_white = r.params["main_solves"]
-    if not t.white and r.stop_reason != "interrupted":
-        r = _execute(plan.if_correlated, V, F, callback, made_here=made_here)
+    q = r.params["discrepancy_ratio"]
+    lowered = (None if _dq.accept_weight(q) or not _dq.FALLBACK_WEIGHTS
+               else _dq.FALLBACK_WEIGHTS[0])  # the one further solve a call affords
+    if r.stop_reason == "interrupted":
+        pass
+    elif not t.white:
+        r = _execute(plan.if_correlated, V, F, callback, made_here=made_here,
+                     outside=lowered, resolve=False)
         r.params["main_solves"] += n_white
+        r.params["discrepancy_ratio"] = q
+    elif lowered is not None:
+        log.info("outside weight lowered to %g (discrepancy ratio %.3f)", lowered, q)
+        r = _execute(pw, V, F, callback, made_here=made_here, outside=lowered)
+        r.params["main_solves"] += n_white
+        r.params["discrepancy_ratio"] = q
     dec = Decision("noise_model", "white" if t.white else "correlated",
                    "white-noise test of the white model's residual (whiteness.py)",
                    {"rho1": t.rho1, "level_ratio": t.level_ratio})

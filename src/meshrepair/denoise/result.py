@@ -25,8 +25,8 @@ class DenoiseResult:
     noise_estimate : float, γ̂ of the input in mean edge lengths
     params : dict, the parameters actually used (``params["main_solves"]``: main ADMM solves
         the call ran, the probe not counted: 1, plus one for the correlated model when the
-        white result fails the white-noise test, plus the discrepancy test's or the collapse
-        check's solve again)
+        white result fails the white-noise test or for the discrepancy test's lowered weight;
+        at most 2, 3 only when the collapse check solves again)
     n_unfolded : int, faces folded over in the input that were unfolded before the solve
         (``params["result_folds_unfolded"]``: faces folded in the solve's result, unfolded
         after it)
