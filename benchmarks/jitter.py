@@ -12,6 +12,11 @@ then the largest and the median of ``|change|``.
     python benchmarks/jitter.py                    # every noisy and published case
     python benchmarks/jitter.py --only fandisk --eps 1e-8 --seed 3 --out table.md
     python benchmarks/jitter.py --decisions 0.5    # + the params that moved where |change| > 0.5 %
+    python benchmarks/jitter.py --only fandisk__gauss0.7 --option n_solver=direct --probe-trace
+
+``--option KEY=VALUE`` (repeatable) passes a keyword to ``denoise`` in both runs (values are
+read as Python literals, else kept as strings); ``--probe-trace`` prints, per case, the relative
+difference of the two runs' probe energies every 5 iterations (where the rounding grows).
 
 The machine's memory probe is printed with the table (benchmarks/_common.py).
 """
@@ -57,20 +62,37 @@ def jitter(V: np.ndarray, eps: float, seed: int) -> np.ndarray:
     return V + (eps * diag) * d
 
 
-def run(case, noisy, truth, eps: float, seed: int) -> dict:
-    from meshrepair import denoise, msae
+def run(case, noisy, truth, eps: float, seed: int, options: dict | None = None) -> dict:
+    from meshrepair import denoise, msae, plan_denoise
 
     Vn, F, _ = C.read(noisy)
     Vt, Ft, _ = C.read(truth)
     if not np.array_equal(F, Ft):
         raise SystemExit(f"{noisy} and {truth} do not share faces")
+    options = options or {}
     t = time.perf_counter()
-    r0 = denoise(Vn, F)
-    r1 = denoise(jitter(Vn, eps, seed), F)
+    Vj = jitter(Vn, eps, seed)
+    p0, p1 = plan_denoise(Vn, F, **options), plan_denoise(Vj, F, **options)
+    r0, r1 = denoise(Vn, F, plan=p0), denoise(Vj, F, plan=p1)
     m0, m1 = msae(r0.V, Vt, F), msae(r1.V, Vt, F)
+    h0, h1 = p0._state.r1.history, p1._state.r1.history
+    trace = [abs(h1[i]["energy"] / h0[i]["energy"] - 1.0)
+             for i in range(0, min(len(h0), len(h1)), 5)]
     return {"case": case, "nV": len(Vn), "msae": m0, "msae_jitter": m1,
             "change": m1 / m0 - 1.0, "time_s": time.perf_counter() - t,
-            "moved": moved_params(r0.params, r1.params)}
+            "moved": moved_params(r0.params, r1.params), "probe_trace": trace}
+
+
+def _option(text: str) -> tuple[str, object]:
+    import ast
+
+    key, sep, value = text.partition("=")
+    if not sep or not key:
+        raise SystemExit(f"--option takes KEY=VALUE, not {text!r}")
+    try:
+        return key, ast.literal_eval(value)
+    except (ValueError, SyntaxError):
+        return key, value
 
 
 def moved_params(p0: dict, p1: dict, rel: float = 1e-3) -> dict:
@@ -101,7 +123,12 @@ def main(argv=None) -> None:
     ap.add_argument("--out", help="also write the markdown table to this file")
     ap.add_argument("--decisions", type=float, default=None, metavar="PCT",
                     help="list the params that moved (> 0.1 %%) for cases whose |change| > PCT %%")
+    ap.add_argument("--option", action="append", default=[], metavar="KEY=VALUE",
+                    help="a denoise keyword for both runs (repeatable)")
+    ap.add_argument("--probe-trace", action="store_true",
+                    help="print the probe energies' relative difference every 5 iterations")
     args = ap.parse_args(argv)
+    options = dict(_option(o) for o in args.option)
     if not (np.isfinite(args.eps) and args.eps > 0):
         raise SystemExit("--eps must be a positive finite number")
     todo = cases()
@@ -111,14 +138,15 @@ def main(argv=None) -> None:
         todo = [c for c in todo if re.search(args.only, c[0])]
     C.limit_threads(1)
     print(f"machine: {C.machine_info()}\n", flush=True)
-    lines = [f"jitter {args.eps:g} · bounding-box diagonal per vertex, seed {args.seed}", "",
+    opts = "".join(f", {k}={v!r}" for k, v in options.items())
+    lines = [f"jitter {args.eps:g} · bounding-box diagonal per vertex, seed {args.seed}{opts}", "",
              "| case | #V | MSAE | MSAE jittered | change | time (2 runs) |",
              "|---|---:|---:|---:|---:|---:|"]
     for line in lines:
         print(line, flush=True)
     rows = []
     for case, noisy, truth in todo:
-        r = run(case, noisy, truth, args.eps, args.seed)
+        r = run(case, noisy, truth, args.eps, args.seed, options)
         rows.append(r)
         line = (f"| {case} | {r['nV']} | {r['msae']:.3f} | {r['msae_jitter']:.3f} "
                 f"| {100 * r['change']:+.3f} % | {r['time_s']:.1f} s |")
@@ -133,6 +161,11 @@ def main(argv=None) -> None:
             if abs(r["change"]) * 100 > args.decisions:
                 moved = ", ".join(f"{k} {_fmt(a)} -> {_fmt(b)}" for k, (a, b) in r["moved"].items())
                 tail.append(f"{r['case']} ({100 * r['change']:+.2f} %): {moved or 'none'}")
+    if args.probe_trace:
+        tail.append("")
+        for r in rows:
+            tail.append(f"{r['case']} probe energy difference every 5 iterations: "
+                        + " ".join(f"{x:.1e}" for x in r["probe_trace"]))
     for line in tail:
         print(line, flush=True)
     if args.out:
