@@ -105,14 +105,15 @@ def _plan_one(V, F, *, lam, th, a, robust_iters, feature_iters, mask_update_ever
     dec: list[Decision] = []
     report, topo = _check_mesh(V, F, name="input mesh")
     Vr = V if read_from is None else read_from  # the readings' vertices
-    gamma, gamma_rms = noise_statistics(Vr, F, topo)
-    impulsive = is_impulsive(gamma, gamma_rms)
+    gamma, gamma_rms, gamma_iso = noise_statistics(Vr, F, topo, isolated=True)
+    impulsive = is_impulsive(gamma, gamma_iso)
     lam_used = lambda_from_noise(gamma, lowpassed=presmoothed) if lam is None else float(lam)
-    delta = huber_from_noise(gamma, gamma_rms) if huber_delta is None else float(huber_delta)
-    rule = (f"huber_from_noise: 2 γ̂_rms when γ̂_rms > {IMPULSIVE_RATIO:g} γ̂ (impulsive), "
-            "else 0")
+    delta = huber_from_noise(gamma_rms, impulsive) if huber_delta is None else float(huber_delta)
+    rule = (f"huber_from_noise: 2 γ̂_rms when γ̂_rms,iso > {IMPULSIVE_RATIO:g} γ̂ (impulsive; "
+            "the RMS without coherent relief), else 0")
     dec.append(Decision("huber_delta", delta, "set by the user" if huber_delta is not None
-                        else rule, {"gamma": gamma, "gamma_rms": gamma_rms},
+                        else rule, {"gamma": gamma, "gamma_rms": gamma_rms,
+                                    "gamma_rms_isolated": gamma_iso},
                         huber_delta is not None))
     opts_kw = dict(lam=lam_used, huber_delta=delta, th=th, tol=tol, inner_solver=inner_solver,
                    inner_iters=inner_iters, n_solver=n_solver,
@@ -299,7 +300,8 @@ def _plan_one(V, F, *, lam, th, a, robust_iters, feature_iters, mask_update_ever
                             {"vertices": len(V)}))
     for t in {id(topo): topo, id(topo_w): topo_w}.values():  # the readings' operators: the
         t.drop_cache(keep=("interior_edges",))  # main solve keeps only the solver's tables
-    reading = {"gamma": gamma, "gamma_rms": gamma_rms, "impulsive": bool(impulsive),
+    reading = {"gamma": gamma, "gamma_rms": gamma_rms, "gamma_rms_isolated": gamma_iso,
+               "impulsive": bool(impulsive),
                "folded_faces": n_unf, **{k: info[k] for k in
                                          ("tangential_ratio", "support_fraction", "noise_rho",
                                           "noise_length", "noise_gamma_scale")}}

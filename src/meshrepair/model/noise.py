@@ -71,17 +71,38 @@ def estimate_noise(V: np.ndarray, F: np.ndarray, topo: Topology | None = None) -
     return noise_statistics(V, F, topo)[0]
 
 
-def noise_statistics(V: np.ndarray, F: np.ndarray, topo: Topology | None = None
-                     ) -> tuple[float, float]:
+OUTLIER_MADS = 3.0
+"""A vertex whose normal Laplacian deviates from the median by more than this many robust
+standard deviations (1.4826 MAD) is an outlier of :func:`noise_statistics` (0.27 % of the
+vertices under Gaussian noise)."""
+
+
+def noise_statistics(V: np.ndarray, F: np.ndarray, topo: Topology | None = None, *,
+                     isolated: bool = False) -> tuple[float, ...]:
     """The robust (MAD) and the plain (RMS) noise level of :func:`estimate_noise`.
 
     The two agree for Gaussian noise (measured within 5 % on the shared meshes at γ = 0.2);
     impulsive noise, where a minority of vertices moves far, reads 1.5× higher in RMS
     (an impulsive CAD input of the shared set: 0.206 vs 0.306).
 
+    With ``isolated`` a third level is returned: the RMS without the surface's *coherent*
+    relief, which tells impulsive noise from creases. With ``h_i`` the normal Laplacian and
+    ``s = 1.4826 MAD(h)``, an outlier ``|h_i − med h| > 3 s`` (:data:`OUTLIER_MADS`) that has a
+    neighbour which is an outlier of the same sign lies on a crease or a ridge line, whose
+    vertices all bend the same way: it is relief, not noise, and does not enter that RMS. An
+    impulse is isolated (a vertex thrown off moves its ring's Laplacian the other way), and
+    Gaussian noise has a same-sign outlier pair next to an outlier with probability about
+    ``6 · 0.00135``, so neither is affected. Without this, the creases of a CAD part at low
+    noise (and the ridges of a scanned surface) read as impulsive noise: the shared fandisk
+    part with Gaussian noise of 0.05 l̄ reads RMS/MAD 2.26 with every vertex and 0.93 without
+    the coherent outliers, while one tenth of its vertices thrown by 0.5-1.5 l̄ reads 2.24, and
+    the shared impulsive input (twelve, 73 % of the vertices moved) 1.49 and 1.47
+    (``tests/test_noise.py``).
+
     Returns
     -------
-    (gamma_mad, gamma_rms) : floats in mean edge lengths.
+    (gamma_mad, gamma_rms) or, with ``isolated``, (gamma_mad, gamma_rms, gamma_rms_isolated) :
+        floats in mean edge lengths.
     """
     V = np.asarray(V, dtype=np.float64)
     F = np.asarray(F, dtype=np.int64)
@@ -96,7 +117,7 @@ def noise_statistics(V: np.ndarray, F: np.ndarray, topo: Topology | None = None
     bnd[topo.edges[topo.boundary].ravel()] = True
     ok &= ~bnd
     if not ok.any():
-        return 0.0, 0.0
+        return (0.0, 0.0, 0.0) if isolated else (0.0, 0.0)
     lap = S[ok] / deg[ok, None] - V[ok]
     n = vertex_normals(V, F)[ok]
     h = np.einsum("ij,ij->i", lap, n) / np.sqrt(1.0 + 1.0 / deg[ok])
@@ -104,4 +125,16 @@ def noise_statistics(V: np.ndarray, F: np.ndarray, topo: Topology | None = None
     L = _k_edge_lengths(V, topo.edges).mean()
     mad = 1.4826 * np.median(np.abs(dev))
     rms = np.sqrt(np.mean(dev**2))
-    return float(mad / L), float(rms / L)
+    if not isolated:
+        return float(mad / L), float(rms / L)
+    # outliers with a same-sign outlier neighbour (relief lines) leave the isolated RMS
+    side = np.zeros(nV, np.int8)
+    side[ok] = np.where(dev > OUTLIER_MADS * mad, 1, np.where(dev < -OUTLIER_MADS * mad, -1, 0))
+    a, b = e[:, 0], e[:, 1]
+    pair = (side[a] != 0) & (side[a] == side[b])
+    coherent = np.zeros(nV, bool)
+    coherent[a[pair]] = True
+    coherent[b[pair]] = True
+    keep = ~coherent[ok]
+    rms_iso = np.sqrt(np.mean(dev[keep] ** 2)) if keep.any() else 0.0
+    return float(mad / L), float(rms / L), float(rms_iso / L)
