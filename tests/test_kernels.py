@@ -374,3 +374,162 @@ def test_signed_volume_kernel_agrees(mesh):
     m = trimesh.creation.icosphere(3)
     Vs, Fs = np.asarray(m.vertices), np.asarray(m.faces, dtype=np.int64)
     assert _nb_signed_volume(Vs, Fs, np.zeros(3)) == pytest.approx(m.volume, rel=1e-12)
+
+
+def _open_pinched_mesh(rng):
+    """An icosphere with a hole, a second one touching it at a vertex (pinched), an
+    unreferenced vertex and the faces shuffled."""
+    m = trimesh.creation.icosphere(3)
+    V = np.asarray(m.vertices)
+    F = np.asarray(m.faces, dtype=np.int64)[5:]
+    F2 = F + len(V) - 1
+    F2[F2 == len(V) - 1 + 7] = F[0, 0]  # vertex 7 of the copy is vertex F[0, 0]: pinched
+    F2 = np.r_[F, F2]
+    F2 = F2[rng.permutation(len(F2))]
+    V2 = np.r_[V, V + 2.0, [[9.0, 9.0, 9.0]]]
+    return V2, F2
+
+
+def test_setup_kernels_agree_with_numpy(rng):
+    """Face centroids, exact edge lengths, pair order, fan counts, duplicate rows, the face
+    side pattern and the permuted edge tables: the compiled pass equals its numpy twin."""
+    V, F = _open_pinched_mesh(rng)
+    nV = len(V)
+    assert np.array_equal(K._nb_face_centroids(V, F), K._np_face_centroids(V, F))
+    topo = edge_topology(F, nV)
+    E = topo.edges
+    assert np.array_equal(K._nb_edge_lengths_exact(V, E), K._np_edge_lengths_exact(V, E))
+    lo = rng.integers(0, 50, 3000)
+    hi = rng.integers(0, 8, 3000)
+    lo[:100] = 3  # a long bucket (merge sort)
+    assert np.array_equal(K._nb_pair_order(lo, hi, 50), K._np_pair_order(lo, hi, 50))
+    inner = topo.edge_counts == 2
+    order = K.group_halfedges(F, nV)
+    _, edge_he, _, _ = K.edges_from_groups(F, order)
+    h1, h2 = edge_he[inner, 0], edge_he[inner, 1]
+    fans = K._nb_fan_counts(F, h1, h2, nV)
+    assert np.array_equal(fans, K._np_fan_counts(F, h1, h2, nV))
+    assert fans.max() == 2 and fans[-1] == 0
+    W = np.r_[V, V[[3, 5]], [[-0.0, 1.0, 2.0], [0.0, 1.0, 2.0]]] + 0.0
+    bits = W.view(np.uint64).reshape(-1, 3)
+    d = K._nb_duplicate_rows(bits)
+    assert np.array_equal(d, K._np_duplicate_rows(bits))
+    assert d.tolist() == [len(V), len(V) + 1, len(V) + 3]
+    ok = topo.interior & (rng.random(topo.n_edges) < 0.8)
+    for x, y in zip(K._nb_face_side_csr(topo.face_edges, topo.edge_faces, ok),
+                    K._np_face_side_csr(topo.face_edges, topo.edge_faces, ok), strict=True):
+        assert np.array_equal(x, y)
+
+
+def test_permuted_topology_equals_a_new_build(rng):
+    """The topology of a renumbered, reordered mesh permuted from the first one equals the one
+    built from the new faces (compiled and numpy), boundary and pinched vertex included."""
+    from meshrepair.mesh.topology import permuted_topology
+
+    V, F = _open_pinched_mesh(rng)
+    nV = len(V)
+    topo = edge_topology(F, nV)
+    pv = rng.permutation(nV)
+    pf = rng.permutation(len(F))
+    inv = np.empty_like(pv)
+    inv[pv] = np.arange(nV)
+    Fw = inv[F][pf]
+    ref = edge_topology(Fw, nV)
+    new = permuted_topology(topo, inv, pf, Fw)
+    args = (topo.edges, topo.edge_faces, topo.face_edges, topo.edge_counts, inv, pf)
+    for name, x, y in zip(("edges", "edge_faces", "face_edges", "edge_counts"),
+                          K._np_permuted_edges(*args), K._nb_permuted_edges(*args), strict=True):
+        assert np.array_equal(x, getattr(ref, name)) and np.array_equal(y, x), name
+    for name in ("edges", "edge_faces", "face_edges", "edge_counts", "faces"):
+        assert np.array_equal(getattr(new, name), getattr(ref, name)), name
+    assert new.n_vertices == ref.n_vertices
+
+
+def test_more_setup_kernels_agree_with_numpy(rng):
+    """The one-pass edge tables, creased edges, ring growth, umbrella entries and interior
+    edges equal their numpy twins (and the two-step grouping)."""
+    from meshrepair.mesh.topology import adjacency
+
+    V, F = _open_pinched_mesh(rng)
+    nV = len(V)
+    ref = K.edges_from_groups(F, K.group_halfedges(F, nV))
+    for x, y, z in zip(K._nb_edge_tables(F, nV), K._np_edge_tables(F, nV), ref, strict=True):
+        assert np.array_equal(x, y) and np.array_equal(x, z)
+    # a high-valence vertex (the merge-sort bucket)
+    n = len(V)
+    ring = n + 1 + np.arange(100)
+    F2 = np.r_[F, np.c_[np.full(100, n), ring, np.roll(ring, -1)]]
+    for x, y in zip(K._nb_edge_tables(F2, n + 101), K._np_edge_tables(F2, n + 101), strict=True):
+        assert np.array_equal(x, y)
+    topo = edge_topology(F, nV)
+    N = K.face_normals(V + 0.05 * rng.normal(size=V.shape), F)
+    c = K._nb_creased_edges(N, topo.edge_faces, np.cos(np.radians(20.0)))
+    assert c.any() and np.array_equal(c, K._np_creased_edges(N, topo.edge_faces,
+                                                             np.cos(np.radians(20.0))))
+    act = rng.random(nV) < 0.05
+    assert np.array_equal(K._nb_grow(act, topo.edges), K._np_grow(act, topo.edges))
+    A = adjacency(topo)
+    for x, y in zip(K._nb_umbrella_entries(A.indptr, A.indices),
+                    K._np_umbrella_entries(A.indptr, A.indices), strict=True):
+        assert np.array_equal(x, y) and x.dtype == y.dtype
+    for x, y in zip(K._nb_interior_edges(topo.edges, topo.edge_faces),
+                    K._np_interior_edges(topo.edges, topo.edge_faces), strict=True):
+        assert np.array_equal(x, y)
+
+
+def test_adjacency_and_renumbering_kernels(rng):
+    """The adjacency of a topology's sorted edges equals sym_csr's (and other edges go to
+    sym_csr); the renumbered faces equal ``inv[F][pf]``."""
+    V, F = _open_pinched_mesh(rng)
+    topo = edge_topology(F, len(V))
+    for x, y in zip(K.edge_csr(topo.edges, len(V)), K.sym_csr(topo.edges[:, 0], topo.edges[:, 1],
+                                                               len(V)), strict=True):
+        assert np.array_equal(x, y)
+    assert K._nb_sorted_edge_csr(topo.edges, len(V))[2]
+    shuffled = topo.edges[rng.permutation(topo.n_edges)]
+    assert not K._nb_sorted_edge_csr(shuffled, len(V))[2]
+    for x, y in zip(K.edge_csr(shuffled, len(V)), K.sym_csr(shuffled[:, 0], shuffled[:, 1],
+                                                             len(V)), strict=True):
+        assert np.array_equal(x, y)
+    inv = rng.permutation(len(V))
+    pf = rng.permutation(len(F))
+    assert np.array_equal(K._nb_renumbered_faces(F, inv, pf), K._np_renumbered_faces(F, inv, pf))
+
+
+def test_face_neighbours_per_face_equal_the_table(rng):
+    """The face-neighbour table gathered per face equals the two-pass table of the interior
+    edges (compiled and numpy)."""
+    V, F = _open_pinched_mesh(rng)
+    topo = edge_topology(F, len(V))
+    _, _, fa, fb = K.interior_edges(topo.edges, topo.edge_faces)
+    ref = K.face_neighbour_table(fa, fb, topo.n_faces)
+    for x, y, z in zip(K._nb_face_neighbours(topo.face_edges, topo.edge_faces),
+                       K._np_face_neighbours(topo.face_edges, topo.edge_faces), ref, strict=True):
+        assert np.array_equal(x, z) and np.array_equal(y, z)
+
+
+def test_product_pattern_is_scipys(rng):
+    """Rings of faces grown by the compiled product pattern equal scipy's ``(S @ Af)`` pattern
+    entry for entry (the order of its stored columns included), ring after ring."""
+    from meshrepair.denoise.regions import _ring, _side_adjacency
+
+    V, F = _open_pinched_mesh(rng)
+    topo = edge_topology(F, len(V))
+    mask = rng.random(topo.n_edges) < 0.1
+    Af = _side_adjacency(topo, mask, len(F))
+    n = 40
+    f = rng.integers(0, len(F), n)
+    S0 = sp.csr_matrix((np.ones(n), (np.arange(n), f)), shape=(n, len(F)))
+    S1 = S0
+    work = np.full(len(F), -1, np.int64)
+    for _ in range(4):
+        S0 = (S0 @ Af).tocsr()
+        S0.data[:] = 1.0
+        S1 = _ring(S1, Af, work)
+        assert np.array_equal(S0.indptr, S1.indptr) and np.array_equal(S0.indices, S1.indices)
+        assert (work == -1).all()
+    args = (S0.indptr, S0.indices, Af.indptr, Af.indices)
+    a = K._nb_product_pattern(*[np.asarray(x, np.int64) for x in args], len(F), work)
+    b = K._np_product_pattern(*args, len(F), work)
+    for x, y in zip(a, b, strict=True):
+        assert np.array_equal(x, y)

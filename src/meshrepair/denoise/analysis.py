@@ -126,9 +126,10 @@ def _plan_one(V, F, *, lam, th, a, robust_iters, feature_iters, mask_update_ever
     if unfold:
         from meshrepair.model.relax import locally_flipped_faces
 
-        n_unf = int(locally_flipped_faces(V, topo).sum())
+        flipped = locally_flipped_faces(V, topo)
+        n_unf = int(flipped.sum())
         if n_unf:
-            Vs, left = untangle(V, topo)
+            Vs, left = untangle(V, topo, flipped=flipped)
             log.info("unfolded %d folded-over faces (%d left)", n_unf - left, left)
     auto_robust = robust_iters is None and stages is None
     if robust_iters is None:
@@ -154,10 +155,12 @@ def _plan_one(V, F, *, lam, th, a, robust_iters, feature_iters, mask_update_ever
         pv, pf = locality_order(Vs, F)
         inv = np.empty_like(pv)
         inv[pv] = np.arange(len(pv))
-        Fw, Vw, Vd = inv[F][pf], Vs[pv], V[pv]
-        from meshrepair.mesh.topology import edge_topology
+        from meshrepair._kernels import renumbered_faces
+        from meshrepair.mesh.topology import permuted_topology
 
-        topo_w = edge_topology(Fw, len(V))
+        V_pv = V[pv]  # (read only: shared by the fidelity data and the readings below)
+        Fw, Vw, Vd = renumbered_faces(F, inv, pf), Vs[pv], V_pv
+        topo_w = permuted_topology(topo, inv, pf, Fw)
     else:
         Fw, Vw, Vd, topo_w = F, Vs, V, topo
     Vd = fidelity_data(Vd, Vw, impulsive)
@@ -179,8 +182,9 @@ def _plan_one(V, F, *, lam, th, a, robust_iters, feature_iters, mask_update_ever
         # the probe is one stage: its switch rule, in edge units, is the stop rule
         q_edges = _sf.radius_in_edges(V, F, topo.edges)  # the mesh's radius in edge lengths
         kw1 = {**opts_kw, "tol": _sf.probe_tol(st1, q_edges) if PROBE_EARLY_STOP else tol}
-        Vn_w = V[pv] if reorder else V
-        Vt_w = Vr[pv] if reorder else Vr  # the tangential ratio's vertices
+        Vn_w = V_pv if reorder else V
+        # the tangential ratio's vertices
+        Vt_w = (V_pv if Vr is V else Vr[pv]) if reorder else Vr
 
         def run_probe(kw):
             """The probe: to the relative stop, then on to the scale-free stop only when that

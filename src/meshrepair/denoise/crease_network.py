@@ -106,7 +106,7 @@ def side_spreads(topo: Topology, N: np.ndarray, creased: np.ndarray, chain_edges
     """Per edge of ``chain_edges`` (edge indices), the side spread of the module docstring in
     degrees: the mean angle of the faces within ``rings`` steps of each side (across interior
     edges not in ``creased``) to the side's mean normal, averaged over the two sides."""
-    from meshrepair.denoise.regions import _angle, _side_adjacency
+    from meshrepair.denoise.regions import _angle, _ring, _side_adjacency
 
     ce = np.asarray(chain_edges, dtype=np.int64)
     n, nF = len(ce), len(N)
@@ -114,11 +114,11 @@ def side_spreads(topo: Topology, N: np.ndarray, creased: np.ndarray, chain_edges
         return np.zeros(0)
     Af = _side_adjacency(topo, creased, nF)
     tot, cnt_sides = np.zeros(n), np.zeros(n)
+    work = np.full(nF, -1, np.int64)
     for j in range(2):
         S = sp.csr_matrix((np.ones(n), (np.arange(n), topo.edge_faces[ce, j])), shape=(n, nF))
         for _ in range(int(rings)):
-            S = (S @ Af).tocsr()
-            S.data[:] = 1.0
+            S = _ring(S, Af, work)
         r, c = S.nonzero()
         dev = _angle(N[c], (S @ N)[r])
         cnt = np.bincount(r, minlength=n)

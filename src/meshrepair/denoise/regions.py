@@ -61,12 +61,7 @@ FLAT_SPREAD = 4.0
 
 def creased_edges(topo: Topology, N: np.ndarray, th: float) -> np.ndarray:
     """``(nE,) bool``: interior edges whose face normals ``N`` differ by more than ``th`` deg."""
-    ie = np.flatnonzero(topo.interior)
-    m = np.zeros(topo.n_edges, bool)
-    m[ie] = _k.creased(np.ascontiguousarray(N, dtype=np.float64),
-                       np.ascontiguousarray(topo.edge_faces[ie, 0]),
-                       np.ascontiguousarray(topo.edge_faces[ie, 1]), float(th))
-    return m
+    return _k.creased_edges(N, topo.edge_faces, float(th))
 
 
 def long_chains(topo: Topology, mask: np.ndarray, min_edges: int) -> np.ndarray:
@@ -96,8 +91,11 @@ def _side_adjacency(topo: Topology, mask: np.ndarray, n_faces: int) -> sp.csr_ma
     per topology and mask (the chain reads of one set of normals share it)."""
     def build():  # the pattern only: the callers read which faces, not the values
         ok = topo.interior & ~mask
-        indptr, indices = _k.sym_csr(topo.edge_faces[ok, 0], topo.edge_faces[ok, 1], n_faces,
-                                     diag=True)
+        if n_faces == topo.n_faces and int(topo.edge_counts.max(initial=0)) <= 2:
+            indptr, indices = _k.face_side_csr(topo.face_edges, topo.edge_faces, ok)
+        else:  # (edges of more than two faces: the pairs of edge_faces only)
+            indptr, indices = _k.sym_csr(topo.edge_faces[ok, 0], topo.edge_faces[ok, 1],
+                                         n_faces, diag=True)
         return sp.csr_matrix((np.ones(len(indices)), indices, indptr),
                              shape=(n_faces, n_faces))
 
@@ -106,10 +104,7 @@ def _side_adjacency(topo: Topology, mask: np.ndarray, n_faces: int) -> sp.csr_ma
 
 def _grow(act: np.ndarray, e: np.ndarray) -> np.ndarray:
     """``act`` and the vertices one edge of ``e`` (k, 2) away from it (a ring of dilation)."""
-    out = act.copy()
-    out[e[act[e[:, 0]], 1]] = True
-    out[e[act[e[:, 1]], 0]] = True
-    return out
+    return _k.grow(act, e)
 
 
 def chain_statistics(topo: Topology, N: np.ndarray, mask: np.ndarray, edges: np.ndarray, *,
@@ -150,6 +145,14 @@ def chain_statistics(topo: Topology, N: np.ndarray, mask: np.ndarray, edges: np.
     return float(p[0]), float(s[0])
 
 
+def _ring(S: sp.csr_matrix, Af: sp.csr_matrix, work: np.ndarray) -> sp.csr_matrix:
+    """The 0/1 pattern of ``S @ Af`` (one more ring of faces per row) in the order scipy's
+    product stores it (:func:`meshrepair._kernels.product_pattern`; ``work`` is reused)."""
+    indptr, indices = _k.product_pattern(S.indptr, S.indices, Af.indptr, Af.indices,
+                                         Af.shape[0], work)
+    return sp.csr_matrix((np.ones(len(indices)), indices, indptr), shape=S.shape)
+
+
 def _group_median(x: np.ndarray, g: np.ndarray, n_groups: int) -> np.ndarray:
     """Median of ``x`` within each group ``g`` (``0 <= g < n_groups``, every group non-empty)."""
     o = np.lexsort((x, g))
@@ -167,10 +170,10 @@ def _chain_stats(Af, N, fa, fb, group, n_groups, persist_rings, side_rings):
     S = [sp.csr_matrix((np.ones(n), (np.arange(n), f)), shape=(n, nF)) for f in (fa, fb)]
     spread = np.zeros(n)
     p = np.ones(n_groups)
+    work = np.full(nF, -1, np.int64)
     for k in range(1, max(persist_rings, side_rings) + 1):
         for j in range(2):
-            S[j] = (S[j] @ Af).tocsr()
-            S[j].data[:] = 1.0
+            S[j] = _ring(S[j], Af, work)
         if k == side_rings:
             for Sj in S:
                 r, c = Sj.nonzero()

@@ -31,6 +31,7 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.sparse as sp
 
+from meshrepair._kernels import edge_lengths_exact
 from meshrepair._kernels.select import median_inplace
 from meshrepair.mesh.geometry import vertex_normals
 from meshrepair.mesh.topology import Topology, edge_topology, umbrella_operator
@@ -160,8 +161,7 @@ def _sampled(V, F, topo, rings: int):
     if len(idx) > MAX_SAMPLES:  # medians over an even subsample (every j-th interior vertex)
         ok = np.zeros_like(ok)
         ok[idx[:: int(np.ceil(len(idx) / MAX_SAMPLES))]] = True
-    e = topo.edges
-    lbar = float(np.linalg.norm(V[e[:, 0]] - V[e[:, 1]], axis=1).mean())
+    lbar = float(edge_lengths_exact(V, topo.edges).mean())
     return V, F, topo, W, ok, lbar
 
 

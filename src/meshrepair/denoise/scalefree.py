@@ -71,14 +71,15 @@ def radius_in_edges(V: np.ndarray, F: np.ndarray, edges: np.ndarray | None = Non
     """``q = rms_i |V_i − c| / l̄``, ``c`` the centroid of the referenced vertices and ``l̄``
     the mean length of the unique edges (``edges``, (nE, 2), when known: the faces' unique
     edges otherwise, which costs a sort)."""
-    from meshrepair.mesh.geometry import edge_lengths, mean_edge_length
+    from meshrepair._kernels import edge_lengths_exact
+    from meshrepair.mesh.geometry import mean_edge_length
 
     V = np.asarray(V, dtype=np.float64)
     used = np.zeros(len(V), bool)
     used[np.asarray(F).ravel()] = True
     Vu = V if used.all() else V[used]  # (the same rows in the same order: the same sums)
     X = Vu - Vu.mean(axis=0)
-    el = mean_edge_length(V, F) if edges is None else float(edge_lengths(V, edges).mean())
+    el = mean_edge_length(V, F) if edges is None else float(edge_lengths_exact(V, edges).mean())
     return float(np.sqrt(np.mean(np.einsum("ij,ij->i", X, X))) / max(el, 1e-300))
 
 

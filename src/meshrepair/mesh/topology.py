@@ -89,18 +89,34 @@ def edge_topology(F: np.ndarray, n_vertices: int | None = None) -> Topology:
     nF = F.shape[0]
     if n_vertices is None:
         n_vertices = int(F.max()) + 1 if nF else 0
-    from meshrepair._kernels import edges_from_groups, group_halfedges
+    from meshrepair._kernels import edge_tables
 
     # half-edges grouped by edge, faces ascending (a stable sort by the edge's vertex pair)
-    return _topology_from_parts(F, n_vertices,
-                                *edges_from_groups(F, group_halfedges(F, n_vertices)))
+    return _topology_from_parts(F, n_vertices, *edge_tables(F, n_vertices))
+
+
+def permuted_topology(topo: Topology, inv: np.ndarray, pf: np.ndarray,
+                      faces: np.ndarray) -> Topology:
+    """The topology of ``faces = inv[topo.faces][pf]`` (vertex ``v`` renumbered ``inv[v]``, face
+    ``m`` the old face ``pf[m]``): equal to ``edge_topology(faces, topo.n_vertices)``, permuted
+    from ``topo``'s tables (:func:`meshrepair._kernels.permuted_edges`) when no edge has more
+    than two faces, built again otherwise."""
+    if int(topo.edge_counts.max(initial=0)) > 2:
+        return edge_topology(faces, topo.n_vertices)
+    from meshrepair._kernels import permuted_edges
+
+    edges, edge_faces, face_edges, counts = permuted_edges(
+        topo.edges, topo.edge_faces, topo.face_edges, topo.edge_counts, inv, pf)
+    return Topology(n_vertices=topo.n_vertices, faces=np.asarray(faces, dtype=np.int64),
+                    edges=edges, edge_faces=edge_faces, face_edges=face_edges,
+                    edge_counts=counts)
 
 
 def _topology_from_parts(F: np.ndarray, n_vertices: int, edges: np.ndarray, edge_he: np.ndarray,
                          inv: np.ndarray, counts: np.ndarray) -> Topology:
     """A :class:`Topology` from the output of ``_kernels.edges_from_groups``."""
     nF = F.shape[0]
-    edge_faces = np.where(edge_he >= 0, edge_he // 3, -1)
+    edge_faces = edge_he // 3  # (floor division: an absent half-edge -1 gives face -1)
     return Topology(
         n_vertices=int(n_vertices),
         faces=F,
@@ -140,25 +156,22 @@ def umbrella_operator(topo: Topology) -> sp.csr_matrix:
     entries are stored as scipy's product ``diags(1 / deg) @ A`` stores them (each row's
     columns descending), so ``W @ X`` sums in the same order as that product's."""
     def build():
+        from meshrepair._kernels import umbrella_entries
+
         A = adjacency(topo)
-        indptr = A.indptr
-        deg = np.diff(indptr)
-        row = np.repeat(np.arange(topo.n_vertices), deg)
-        # entry k of row r is entry indptr[r] + indptr[r + 1] - 1 - k of A: rows reversed
-        src = (indptr[:-1] + indptr[1:] - 1)[row] - np.arange(len(row))
-        return sp.csr_matrix((np.repeat(1.0 / np.maximum(deg, 1.0), deg), A.indices[src],
-                              indptr), shape=A.shape)
+        data, indices = umbrella_entries(A.indptr, A.indices)  # each row of A reversed
+        return sp.csr_matrix((data, indices, A.indptr), shape=A.shape)
 
     return cached(topo, ("umbrella",), build)
 
 
 def vertex_adjacency(edges: np.ndarray, n_vertices: int) -> sp.csr_matrix:
     """Symmetric 0/1 vertex adjacency matrix, shape ``(nV, nV)``: canonical CSR (rows sorted,
-    duplicate edges merged), built in one pass (:func:`meshrepair._kernels.sym_csr`)."""
-    from meshrepair._kernels import sym_csr
+    duplicate edges merged), built in one pass (:func:`meshrepair._kernels.edge_csr`)."""
+    from meshrepair._kernels import edge_csr
 
     n = int(n_vertices)
-    indptr, indices = sym_csr(edges[:, 0], edges[:, 1], n)
+    indptr, indices = edge_csr(edges, n)
     return sp.csr_matrix((np.ones(len(indices)), indices, indptr), shape=(n, n))
 
 

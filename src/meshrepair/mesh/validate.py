@@ -2,9 +2,11 @@
 
 :func:`check_mesh` inspects a vertex array ``V`` and a face array ``F`` and either refuses the
 mesh with a :class:`~meshrepair.errors.MeshRepairError` whose message says what is wrong and how
-to fix it, or returns a :class:`MeshReport` describing it. Everything is vectorised numpy/scipy
-(sorted integer edge codes + ``np.unique``, sparse connected components); there is no Python loop
-over vertices, edges or faces, so a 1M-vertex mesh is checked in a few seconds at most.
+to fix it, or returns a :class:`MeshReport` describing it. Everything is vectorised numpy or one
+compiled O(n) pass of :mod:`meshrepair._kernels` (the edge tables of the half-edges, the fans of
+the vertices, a hash of the positions, union-find components; each with a numpy twin); there is
+no Python loop over vertices, edges or faces (1-2 s of CPU at 1.18M vertices:
+docs/performance.md).
 
 Decisions, in the order the checks run (the first refusal wins):
 
@@ -51,10 +53,11 @@ from dataclasses import dataclass
 import numpy as np
 
 from meshrepair._kernels import (
+    duplicate_rows,
     edge_lengths,
-    edges_from_groups,
+    edge_tables,
     face_area2_lmax2,
-    group_halfedges,
+    fan_counts,
     union_find,
 )
 from meshrepair.errors import MeshRepairError
@@ -170,26 +173,11 @@ class MeshReport:
 def _duplicate_vertex_count(V: np.ndarray) -> tuple[int, np.ndarray]:
     """Number of vertices repeating an earlier position, and the first such vertex indices.
 
-    Exact comparison (``-0.0 == 0.0``); hashing first keeps it O(n log n) on uint64 keys.
+    Exact comparison (``-0.0 == 0.0``) of the coordinates' bits in a hash table
+    (:func:`meshrepair._kernels.duplicate_rows`, O(n)).
     """
     W = np.ascontiguousarray(V + 0.0)  # -0.0 -> 0.0
-    bits = W.view(np.uint64).reshape(-1, 3)
-    h = (bits[:, 0] * np.uint64(0x9E3779B97F4A7C15)) ^ (
-        bits[:, 1] * np.uint64(0xC2B2AE3D27D4EB4F)) ^ (bits[:, 2] * np.uint64(0x165667B19E3779F9))
-    order = np.argsort(h, kind="stable")
-    hs = h[order]
-    same = hs[1:] == hs[:-1]
-    if not same.any():
-        return 0, np.empty(0, dtype=np.int64)
-    cand_mask = np.zeros(len(hs), dtype=bool)
-    cand_mask[1:] |= same
-    cand_mask[:-1] |= same
-    cand = np.sort(order[cand_mask])
-    rows = W[cand].view(np.dtype((np.void, 24))).ravel()
-    _, first = np.unique(rows, return_index=True)
-    is_first = np.zeros(len(cand), dtype=bool)
-    is_first[first] = True  # np.unique returns the first occurrence; cand is ascending
-    dups = cand[~is_first]
+    dups = duplicate_rows(W.view(np.uint64).reshape(-1, 3))
     return int(len(dups)), dups
 
 
@@ -199,24 +187,11 @@ def _pinched_vertices(F: np.ndarray, n_vertices: int, he_first: np.ndarray,
 
     Nodes are face corners ``3 * f + k``; the two faces of each interior edge link their corners
     at the edge's two end vertices. The number of connected corner groups at a vertex is its
-    number of fans. ``he_first``/``he_second`` are the two (oppositely oriented) half-edges of
-    each interior edge, as indices ``3 * f + k`` of half-edge ``F[f, k] -> F[f, (k + 1) % 3]``.
+    number of fans (:func:`meshrepair._kernels.fan_counts`). ``he_first``/``he_second`` are the
+    two (oppositely oriented) half-edges of each interior edge, as indices ``3 * f + k`` of
+    half-edge ``F[f, k] -> F[f, (k + 1) % 3]``.
     """
-    n_corners = 3 * F.shape[0]
-    corner_vertex = F.ravel()
-
-    def end_corner(h: np.ndarray) -> np.ndarray:  # the next corner of the same face
-        return np.where(h % 3 == 2, h - 2, h + 1)
-
-    # consistent orientation: h1 = u -> w, h2 = w -> u
-    a = np.concatenate([he_first, end_corner(he_first)])
-    b = np.concatenate([end_corner(he_second), he_second])
-    labels = union_find(n_corners, a, b)
-    n_groups = int(labels.max()) + 1 if len(labels) else 0
-    group_vertex = np.empty(n_groups, dtype=np.int64)
-    group_vertex[labels] = corner_vertex
-    fans = np.bincount(group_vertex, minlength=n_vertices)
-    return fans > 1
+    return fan_counts(F, he_first, he_second, n_vertices) > 1
 
 
 def _boundary_loop_count(bedges: np.ndarray) -> int:
@@ -298,7 +273,7 @@ def _check_mesh(V, F, *, name: str = "mesh", allow_degenerate: bool = False
 
     # --- edges --------------------------------------------------------------------------------
     # half-edge h = 3 f + k runs F[f, k] -> F[f, (k + 1) % 3]
-    edges, edge_he, he_edge, counts = edges_from_groups(F, group_halfedges(F, nV))
+    edges, edge_he, he_edge, counts = edge_tables(F, nV)
     nE = len(edges)
 
     nonman = counts > 2

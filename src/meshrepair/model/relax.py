@@ -106,13 +106,14 @@ def locally_flipped_faces(V: np.ndarray, topo: Topology, cos_max: float = 0.0) -
 
 def _interior_faces(topo: Topology) -> tuple[np.ndarray, np.ndarray]:
     """The two faces of every interior edge, contiguous."""
-    ef = topo.edge_faces
-    inner = ef[:, 1] >= 0
-    return np.ascontiguousarray(ef[inner, 0]), np.ascontiguousarray(ef[inner, 1])
+    from meshrepair._kernels import interior_edges
+
+    return interior_edges(topo.edges, topo.edge_faces)[2:]
 
 
 def untangle(V: np.ndarray, topo: Topology, *, max_iter: int = 50,
-             fixed: np.ndarray | None = None, patience: int = 3) -> tuple[np.ndarray, int]:
+             fixed: np.ndarray | None = None, patience: int = 3,
+             flipped: np.ndarray | None = None) -> tuple[np.ndarray, int]:
     """Unfold locally flipped faces by umbrella smoothing of their vertices and 1-ring only.
 
     Repeats until no face is locally flipped (usually 1-3 rounds) or ``max_iter``; boundary and
@@ -124,6 +125,8 @@ def untangle(V: np.ndarray, topo: Topology, *, max_iter: int = 50,
     neighbours, which are convex creases, not fold-overs) smoothing every vertex only shrinks
     the mesh towards its centroid (by 1/3 per round on a tetrahedron, to 1e-24 after 50 rounds)
     and never lowers the count, so the input is returned unchanged.
+
+    ``flipped``: :func:`locally_flipped_faces` of ``V`` when the caller has it already.
 
     Returns
     -------
@@ -138,7 +141,7 @@ def untangle(V: np.ndarray, topo: Topology, *, max_iter: int = 50,
     if fixed is not None:
         frozen |= np.asarray(fixed, bool)
     V = np.array(V, dtype=np.float64, copy=True)
-    fl = locally_flipped_faces(V, topo)
+    fl = locally_flipped_faces(V, topo) if flipped is None else np.asarray(flipped, bool)
     best_V, best_n, stall = V.copy(), int(fl.sum()), 0
     for _ in range(max_iter):
         if not fl.any():

@@ -35,11 +35,10 @@ log = logging.getLogger(__name__)
 def _interior_edges(topo: Topology):
     """The interior edges ``ie``, their vertices, their two faces ``fa < fb`` and the face
     neighbour table of the N-subproblem (:class:`~meshrepair.model.linear.NormalSystem`)."""
-    ie = np.flatnonzero(topo.interior)
-    fa = np.ascontiguousarray(topo.edge_faces[ie, 0])
-    fb = np.ascontiguousarray(topo.edge_faces[ie, 1])
-    return (ie, np.ascontiguousarray(topo.edges[ie]), fa, fb,
-            _k.face_neighbour_table(fa, fb, topo.n_faces))
+    ie, E_int, fa, fb = _k.interior_edges(topo.edges, topo.edge_faces)
+    if int(topo.edge_counts.max(initial=0)) <= 2:  # per face from its edges
+        return ie, E_int, fa, fb, _k.face_neighbours(topo.face_edges, topo.edge_faces)
+    return ie, E_int, fa, fb, _k.face_neighbour_table(fa, fb, topo.n_faces)
 
 
 def _drop_short_chains(mask: np.ndarray, topo: Topology, min_edges: int) -> np.ndarray:
