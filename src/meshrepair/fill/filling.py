@@ -114,7 +114,8 @@ def fill_holes(
         With ``initial="bilaplacian"``: for each hole without crease routes, also fair the
         patch relative to a local surface fitted to its surround
         (:mod:`meshrepair.holes.fitted`) and keep it where it predicts a probe band of the
-        surround better than the plain fairing (``", fitted dD kK"`` in the hole's reason).
+        surround better than the fairing kept for it (``", fitted dD kK"`` in the hole's
+        reason). Off by default: not better on the design meshes (docs/holes.md, section 5).
 
     Returns
     -------
