@@ -36,10 +36,14 @@ from meshrepair.metrics import distances
 # ------------------------------------------------------------------------------------------------
 
 
+MESHREPAIR_OPTIONS: dict = {}
+"""Keyword options of meshrepair's ``fill_holes`` in the benchmarks (``holes.py --fitted``)."""
+
+
 def _meshrepair(V, F, hc):
     from meshrepair.fill import fill_holes
 
-    r = fill_holes(V, F)
+    r = fill_holes(V, F, **MESHREPAIR_OPTIONS)
     return r.V, r.F
 
 

@@ -301,6 +301,9 @@ def main() -> None:
                     help="protocol case: append one JSON record per run to this file")
     ap.add_argument("--from-jsonl", default=None,
                     help="protocol case: only print the table of the records in this file")
+    ap.add_argument("--fitted", action="store_true",
+                    help="meshrepair fills with fill_holes(fitted=True) (the fitted-surface "
+                         "candidate, docs/holes.md section 5)")
     ap.add_argument("--picture", metavar="PNG", default=None,
                     help="only write the bunny before/after picture (docs/img/holes_bunny.png)")
     ap.add_argument("--crease-picture", metavar="PNG", default=None,
@@ -367,6 +370,10 @@ def main() -> None:
             _holes_peers.run_peers(cut_disc, lines, notes, sm,
                                    [x.strip() for x in args.cad.split(",") if x.strip()])
             lines.extend(notes)
+    if args.fitted:
+        import _holes_peers
+
+        _holes_peers.MESHREPAIR_OPTIONS["fitted"] = True
     if "protocol" in cases:
         import _holes_protocol
 

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import argparse
 import logging
+import re
 
 import numpy as np
 import pytest
@@ -211,7 +212,7 @@ def test_cut_and_refill_cad_model(fandisk, where, radius):
 
 @needs_meshes
 def test_hole_wrapping_a_thin_wall_is_filled_by_the_minimum_weight_fallback(fandisk,
-                                                                           monkeypatch):
+                                                                           monkeypatch, caplog):
     """A disc of radius 16 edges cut at the rim of fandisk's thin fin wraps round the wall. No
     planar view of the loop is simple and the disc-parametrised patch cuts through the fin, faired
     or not; Liepa's minimum-weight triangulation follows the faces on both sides of the wall and
@@ -237,10 +238,17 @@ def test_hole_wrapping_a_thin_wall_is_filled_by_the_minimum_weight_fallback(fand
     # the planar enclosing alone intersects the fin: the loop is a hole of a closed body, so
     # the patch is kept (never refused) and the report says it intersects and to check it
     monkeypatch.setattr(fill_mod, "ENCLOSE_ORDER", ("auto",))
-    res = fill_holes(Vc, Fc)
+    with caplog.at_level(logging.DEBUG, logger="meshrepair.fill"):
+        res = fill_holes(Vc, Fc)
     assert res.holes[0].status == "filled", res.summary()
     assert "intersects the surface" in res.holes[0].note and "check it" in res.holes[0].note
     assert res.holes[0].n_intersections > 0
+    # of the variants tried (faired, 0.5 and 0.25 faired, membrane), the one with the fewest
+    # intersecting face pairs is kept, and the solve does not add any
+    tried = [int(m.group(1)) for r in caplog.records
+             if (m := re.search(r"hole 0 \(auto\): .*, (\d+) face pairs", r.getMessage()))]
+    assert len(tried) == 4, tried
+    assert res.holes[0].n_intersections <= min(tried), (tried, res.holes[0].n_intersections)
 
 
 # measured, x1e-3 of the bbox diagonal, patch vs removed faces over the three holes (planar

@@ -17,7 +17,9 @@ Pipeline of :func:`fill_holes`:
    the surrounding curvature into the hole; ``"harmonic"`` keeps the flat membrane. With
    ``triharmonic=True`` (default) the screened triharmonic fairing (two rings of the surround as
    data, curvature continuity; :mod:`meshrepair.holes.triharmonic`) is computed too and kept for
-   each hole whose seam angle it lowers.
+   each hole whose seam angle it lowers. With ``fitted=True`` (off by default) each hole without
+   crease routes is also faired relative to a local surface fitted to its surround
+   (:mod:`meshrepair.holes.fitted`), kept where it predicts a probe band of the surround better.
 4. *Repair solve* with the shared :class:`~meshrepair.model.solver.ADMMSolver`: ``M_V = 0`` on the
 new
    vertices, ``M_E`` forced to 0 (edge-Willmore) on every edge of a new face (the patch interior

@@ -36,7 +36,8 @@ def _fill_core(V: np.ndarray, F: np.ndarray, holes, skip: dict[int, str], *, den
                callback: Callable[[dict], None] | None,
                progress: Callable[[int, int], None] | None = None,
                creases: bool = True, curvature: bool = True,
-               triharmonic: bool = True, known_holes: set[int] | frozenset[int] = frozenset(),
+               triharmonic: bool = True, fitted: bool = False,
+               known_holes: set[int] | frozenset[int] = frozenset(),
                kept_holes: set[int] | frozenset[int] = frozenset(),
                notes: dict[int, str] | None = None) -> FillResult:
     from meshrepair.mesh.geometry import face_normals, sharp_edge_mask
@@ -46,7 +47,7 @@ def _fill_core(V: np.ndarray, F: np.ndarray, holes, skip: dict[int, str], *, den
     V1, F1, reports, t_enclose, t_initial = _place_patches(
         V, F, holes, skip, initial=initial, edge_length=edge_length, th=th, check=check,
         progress=progress, creases=creases, curvature=curvature, triharmonic=triharmonic,
-        known_holes=known_holes, kept_holes=kept_holes)
+        fitted=fitted, known_holes=known_holes, kept_holes=kept_holes)
     for rep in reports:
         if rep.status == "filled" and notes and rep.index in notes:
             rep.add_note(notes[rep.index])
@@ -119,10 +120,18 @@ def _fill_core(V: np.ndarray, F: np.ndarray, holes, skip: dict[int, str], *, den
             rep = by_rep[i]
             rep.n_intersections = _intersecting(V1, F1, bf, pairs=pairs1)
             if rep.n_intersections and not denoise and V1 is not V_before:
+                # the solve's patch intersects: the initial one is kept unless it intersects
+                # more (a kept patch that intersected already)
+                solved = V1[bv].copy()
+                n_solved = rep.n_intersections
                 V1[bv] = V_before[bv]
                 rep.n_intersections = _intersecting(V1, F1, bf)
-                log.warning("hole %d: the solve made the patch intersect the mesh; kept the "
-                            "initial patch", i)
+                if n_solved <= rep.n_intersections:
+                    V1[bv] = solved
+                    rep.n_intersections = n_solved
+                else:
+                    log.warning("hole %d: the solve made the patch intersect the mesh; kept "
+                                "the initial patch", i)
             if rep.n_intersections:
                 log.warning("hole %d: %d face pairs of the patch intersect the mesh", i,
                             rep.n_intersections)

@@ -41,6 +41,7 @@ def fill_holes(
     creases: bool = True,
     curvature: bool = True,
     triharmonic: bool = True,
+    fitted: bool = False,
 ) -> FillResult:
     """Fill the holes of a triangle mesh smoothly, optionally denoising it in the same solve.
 
@@ -109,6 +110,12 @@ def fill_holes(
         fairing with two rings of the surround as data
         (:func:`meshrepair.holes.triharmonic.fair_triharmonic`) and keep it for each hole whose
         seam angle it lowers (``", triharmonic"`` in the hole's reason).
+    fitted : bool
+        With ``initial="bilaplacian"``: for each hole without crease routes, also fair the
+        patch relative to a local surface fitted to its surround
+        (:mod:`meshrepair.holes.fitted`) and keep it where it predicts a probe band of the
+        surround better than the fairing kept for it (``", fitted dD kK"`` in the hole's
+        reason). Off by default: not better on the design meshes (docs/holes.md, section 5).
 
     Returns
     -------

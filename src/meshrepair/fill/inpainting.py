@@ -42,6 +42,7 @@ def inpaint(
     creases: bool = True,
     curvature: bool = True,
     triharmonic: bool = True,
+    fitted: bool = False,
 ) -> FillResult:
     """Replace a damaged region of a mesh by a smooth patch.
 
@@ -67,7 +68,7 @@ def inpaint(
         Where the region reaches an open border of the input: False (default) refuses to fill
         the merged loop; True keeps the faces along the border and fills the rest.
     denoise, initial, refine, edge_length, lam, th, a, max_iter, tol, rings, relax, inner_solver,
-    inner_iters, check, callback, progress, creases, curvature, triharmonic : as in
+    inner_iters, check, callback, progress, creases, curvature, triharmonic, fitted : as in
         :func:`fill_holes`.
 
     Returns

@@ -13,7 +13,7 @@ INITIAL_MODES = ("bilaplacian", "harmonic")
 SOLVE_OPTIONS: tuple[str, ...] = (
     "denoise", "initial", "refine", "edge_length", "lam", "th", "a", "max_iter", "tol", "rings",
     "relax", "inner_solver", "inner_iters", "check", "callback", "progress", "creases",
-    "curvature", "triharmonic")
+    "curvature", "triharmonic", "fitted")
 """Keyword parameters of both :func:`meshrepair.fill.fill_holes` and
 :func:`meshrepair.fill.inpaint` that are passed on unchanged to the shared solve
 (:func:`meshrepair.fill.core._fill_core`)."""

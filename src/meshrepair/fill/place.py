@@ -61,7 +61,8 @@ are."""
 def _place_patches(V: np.ndarray, F: np.ndarray, holes, skip: dict[int, str], *, initial: str,
                    edge_length: float | None, th: float, check: bool,
                    progress: Callable[[int, int], None] | None, creases: bool, curvature: bool,
-                   triharmonic: bool, known_holes: set[int] | frozenset[int] = frozenset(),
+                   triharmonic: bool, fitted: bool = False,
+                   known_holes: set[int] | frozenset[int] = frozenset(),
                    kept_holes: set[int] | frozenset[int] = frozenset()
                    ) -> tuple[np.ndarray, np.ndarray, list[HoleReport], float, float]:
     """Enclose the selected holes and place their patches; returns ``(V1, F1, reports,
@@ -80,6 +81,16 @@ def _place_patches(V: np.ndarray, F: np.ndarray, holes, skip: dict[int, str], *,
     locked: set[int] = set()
     revert: list[int] = []
     unpair: set[int] = set()  # loops whose annulus intersected: enclosed without their island
+    # a kept patch that intersects with every method: the variant with the fewest face pairs
+    fewest: dict[int, tuple[int, int, float]] = {}  # hole -> (pairs, stage, fraction faired)
+    final: dict[int, float] = {}  # hole -> fraction of the fairing to apply, no more trials
+    goto: dict[int, int] = {}  # hole -> stage to enclose it with on the next pass
+
+    def _seen(i: int, n_x: int, frac: float) -> None:
+        st = stage.get(i, 0)
+        if i not in fewest or n_x < fewest[i][0]:
+            fewest[i] = (n_x, st, frac)
+
     while True:
         ta = time.perf_counter()
         method = {h.index: _enclose_methods(h)[stage.get(h.index, 0)] for h in holes}
@@ -128,6 +139,11 @@ def _place_patches(V: np.ndarray, F: np.ndarray, holes, skip: dict[int, str], *,
                         log.info("hole %d: triharmonic fairing kept (seam %.2f° vs thin plate "
                                  "%.2f°)", i, s_tri, s_thin)
             V1 = _finite_rows(V1, Vm, np.arange(nV, len(V1)), "the thin-plate fairing")
+            if fitted:
+                from meshrepair.fill.fitted import _fitted_candidates
+
+                V1 = _fitted_candidates(V, F, V1, Vm, F1, reports, method, on_crease, sharp_v,
+                                        curvature, nV, nF)
         drop: dict[int, str] = {}
         retry: list[int] = []
         again = False
@@ -139,16 +155,35 @@ def _place_patches(V: np.ndarray, F: np.ndarray, holes, skip: dict[int, str], *,
             by_rep = {r.index: r for r in reports}
             for i, (bv, bf) in blocks.items():
                 rep = by_rep[i]
+                if i in final:
+                    V1 = V1.copy()
+                    V1[bv] = Vm[bv] + final[i] * (V1[bv] - Vm[bv])
+                    n_x = _intersecting(V1, F1, bf, dropped)
+                    unf = "unfaired" if method[i] == "liepa" else "membrane"
+                    rep.reason += ("" if final[i] == 1.0 else f", {final[i]:g} faired"
+                                   if final[i] > 0 else f", {unf}")
+                    note = (f"the patch intersects the surface ({n_x} face pairs, the fewest of "
+                            f"every enclosing method and fairing fraction tried); kept, not "
+                            "refused (a hole of a closed surface, a selected or an uncertain "
+                            "loop): check it")
+                    rep.add_note(note)
+                    log.warning("hole %d: %s", i, note)
+                    continue
                 n_x = _intersecting(V1, F1, bf, dropped, pairs=pairs0)
+                _seen(i, n_x, 1.0)
                 if n_x and initial == "bilaplacian":
                     # keep as much of the fairing as stays clear of the surround: the patch
                     # moved back towards its initial surface by halves, then the initial one
                     unfaired = "unfaired" if method[i] == "liepa" else "membrane"
                     Vf = V1[bv].copy()
                     V1 = V1.copy()
+                    log.debug("hole %d (%s): faired patch, %d face pairs", i, method[i], n_x)
                     for frac in BLEND_STEPS:
                         V1[bv] = Vm[bv] + frac * (Vf - Vm[bv])
                         n_x = _intersecting(V1, F1, bf, dropped)
+                        _seen(i, n_x, frac)
+                        log.debug("hole %d (%s): %g faired, %d face pairs", i, method[i], frac,
+                                  n_x)
                         if not n_x:
                             log.info("hole %d: the faired patch intersects the mesh; kept %g of "
                                      "the fairing", i, frac)
@@ -159,6 +194,8 @@ def _place_patches(V: np.ndarray, F: np.ndarray, holes, skip: dict[int, str], *,
                                  i, "unfaired surface" if unfaired == "unfaired" else "membrane")
                         V1[bv] = Vm[bv]
                         n_x = _intersecting(V1, F1, bf, dropped)
+                        _seen(i, n_x, 0.0)
+                        log.debug("hole %d (%s): %s, %d face pairs", i, method[i], unfaired, n_x)
                         if not n_x:
                             rep.reason += f", {unfaired}"
                 if not n_x:
@@ -208,6 +245,14 @@ def _place_patches(V: np.ndarray, F: np.ndarray, holes, skip: dict[int, str], *,
                     continue
                 if i in known_holes or i in kept_holes:
                     dropped[bf] = False
+                    best = fewest.get(i)
+                    if best is not None and best[0] < n_x:
+                        # an earlier method or fairing fraction intersected less: enclose the
+                        # hole with it again and keep that variant
+                        final[i] = best[2]
+                        goto[i] = best[1]
+                        again = True
+                        continue
                     note = (f"the patch intersects the surface ({n_x} face pairs; tried: "
                             f"{tried}); kept, not refused (a hole of a closed surface, a selected "
                             "or an uncertain loop): check it")
@@ -228,7 +273,10 @@ def _place_patches(V: np.ndarray, F: np.ndarray, holes, skip: dict[int, str], *,
             stage[i] = stage.get(i, 0) + 1
         for i in revert:
             stage[i] = 0
+        for i, st in goto.items():
+            stage[i] = st
         revert = []
+        goto = {}
     if drop:
         V1, F1 = _drop_patches(V1, F1, reports, nV, nF, drop)
     return V1, F1, reports, t_enclose, t_initial

@@ -4,7 +4,9 @@ Subpackage layout (one concept per module): :mod:`.detect` (loops, selection), :
 (2-D helpers, :class:`Patch`), :mod:`.planar` (planar enclosing of one loop), :mod:`.liepa`
 (minimum-weight triangulation), :mod:`.liepa_refine` (its refinement on its own surface),
 :mod:`.enclose` (several holes of a mesh; :mod:`.islands`: annuli, :mod:`.refuse`: refused
-patches), :mod:`.fairing`, :mod:`.triharmonic` (curvature-continuous fairing), :mod:`.intersect`.
+patches), :mod:`.fairing`, :mod:`.triharmonic` (curvature-continuous fairing), :mod:`.fitted`
+(a local surface fitted to a hole's surround and the fairing relative to it),
+:mod:`.intersect`.
 
 A *hole* is a simple closed boundary loop. :func:`find_holes` takes the loops of
 :func:`meshrepair.mesh.topology.boundary_loops` (which follow the face orientation) and splits a
