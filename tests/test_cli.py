@@ -119,3 +119,24 @@ def test_ctrl_c_stops_cleanly(tmp_path, monkeypatch, save):
         assert read_mesh(out).V.shape == read_mesh(SPOT).V.shape
     else:
         assert rc == 130 and not out.exists()
+
+
+@pytest.mark.parametrize("fitted", [False, True])
+def test_fill_fitted_flag_matches_the_library(tmp_path, fitted):
+    """``fill --fitted`` passes ``fitted=True`` to :func:`meshrepair.fill_holes`: the file it
+    writes holds the library's patch."""
+    import meshrepair as mr
+
+    V, F = bundled_mesh("spot.ply")
+    cut = np.linalg.norm(V[F].mean(axis=1) - V[1500], axis=1) < 0.12
+    holed, out = tmp_path / "holed.ply", tmp_path / "filled.ply"
+    write_mesh(holed, V, F[~cut])
+    src = read_mesh(holed)
+    args = ["fill", str(holed), str(out), "-q"] + (["--fitted"] if fitted else [])
+    assert main(args) == 0
+    ref = mr.fill_holes(src.V, src.F, fitted=fitted)
+    got = read_mesh(out)
+    assert got.F.shape == ref.F.shape
+    np.testing.assert_allclose(got.V, ref.V, atol=1e-6 * np.ptp(V, axis=0).max())
+    other = mr.fill_holes(src.V, src.F, fitted=not fitted)  # the flag changes this hole's patch
+    assert other.V.shape != ref.V.shape or not np.allclose(other.V, ref.V, atol=1e-4)

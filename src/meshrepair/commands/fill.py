@@ -181,10 +181,15 @@ def add_solve_options(p) -> None:
                    help="initial patch: curved thin-plate fairing (default) or flat membrane")
     p.add_argument("--no-refine", action="store_true",
                    help="skip the ADMM solve (keep the initial patch; ignored with --denoise)")
+    p.add_argument("--fitted", action="store_true",
+                   help="also try a patch faired relative to a surface fitted to the hole's "
+                   "surround, kept per hole where it predicts the surround better "
+                   "(docs/holes.md, section 5; off by default)")
 
 
 def _solve_options(args: argparse.Namespace) -> dict:
-    return dict(denoise=args.denoise, initial=args.initial, refine=not args.no_refine)
+    return dict(denoise=args.denoise, initial=args.initial, refine=not args.no_refine,
+                fitted=args.fitted)
 
 
 def add_fill_options(p) -> None:
