@@ -11,9 +11,10 @@ from __future__ import annotations
 
 # split by concept: _jit (numba detection, njit, FASTMATH), faces (per-face geometry), venergy
 # (the V-subproblem), edges (per-edge gathers), admm (PCG, t update, multipliers, regulariser),
-# connectivity (setup kernels); every name is re-exported here. tstep (the t-update from N in
-# one pass), fidelity (the tangential anchor) and priors (the flat-TV / per-edge-weight t-update)
-# are imported from their modules.
+# connectivity, patterns, tables (setup kernels: grouping and union-find, sparse patterns,
+# per-element tables); every name is re-exported here. tstep (the t-update from N in one pass),
+# fidelity (the tangential anchor) and priors (the flat-TV / per-edge-weight t-update) are
+# imported from their modules.
 from meshrepair._kernels._jit import CACHE_DISABLED, FASTMATH, HAVE_NUMBA, njit  # noqa: F401
 from meshrepair._kernels.admm import (  # noqa: F401
     _np_normalize_z,
@@ -30,45 +31,18 @@ from meshrepair._kernels.admm import (  # noqa: F401
     update_rho2,
 )
 from meshrepair._kernels.connectivity import (  # noqa: F401
-    _np_creased_edges,
-    _np_duplicate_rows,
-    _np_edge_tables,
     _np_edges_from_groups,
     _np_face_neighbour_table,
-    _np_face_neighbours,
-    _np_face_side_csr,
-    _np_fan_counts,
     _np_group_halfedges,
-    _np_grow,
-    _np_interior_edges,
     _np_morton,
     _np_pair_order,
-    _np_permuted_edges,
-    _np_product_pattern,
-    _np_renumbered_faces,
-    _np_sym_csr,
-    _np_umbrella_entries,
     _np_union_find,
     creased,
-    creased_edges,
-    duplicate_rows,
-    edge_csr,
-    edge_tables,
     edges_from_groups,
     face_neighbour_table,
-    face_neighbours,
-    face_side_csr,
-    fan_counts,
     group_halfedges,
-    grow,
-    interior_edges,
     morton,
     pair_order,
-    permuted_edges,
-    product_pattern,
-    renumbered_faces,
-    sym_csr,
-    umbrella_entries,
     union_find,
 )
 from meshrepair._kernels.edges import (  # noqa: F401
@@ -98,6 +72,37 @@ from meshrepair._kernels.faces import (  # noqa: F401
     min_corner_cos,
     vertex_normals,
 )
+from meshrepair._kernels.patterns import (  # noqa: F401
+    _np_face_neighbours,
+    _np_face_side_csr,
+    _np_product_pattern,
+    _np_sym_csr,
+    _np_umbrella_entries,
+    edge_csr,
+    face_neighbours,
+    face_side_csr,
+    product_pattern,
+    sym_csr,
+    umbrella_entries,
+)
+from meshrepair._kernels.tables import (  # noqa: F401
+    _np_creased_edges,
+    _np_duplicate_rows,
+    _np_edge_tables,
+    _np_fan_counts,
+    _np_grow,
+    _np_interior_edges,
+    _np_permuted_edges,
+    _np_renumbered_faces,
+    creased_edges,
+    duplicate_rows,
+    edge_tables,
+    fan_counts,
+    grow,
+    interior_edges,
+    permuted_edges,
+    renumbered_faces,
+)
 from meshrepair._kernels.venergy import (  # noqa: F401
     _np_venergy,
     _np_venergy_grad,
@@ -121,25 +126,11 @@ if HAVE_NUMBA:
     )
     from meshrepair._kernels.connectivity import (  # noqa: F401
         _nb_creased,
-        _nb_creased_edges,
-        _nb_duplicate_rows,
-        _nb_edge_tables,
         _nb_edges_from_groups,
         _nb_face_neighbour_table,
-        _nb_face_neighbours,
-        _nb_face_side_csr,
-        _nb_fan_counts,
         _nb_group_halfedges,
-        _nb_grow,
-        _nb_interior_edges,
         _nb_morton,
         _nb_pair_order,
-        _nb_permuted_edges,
-        _nb_product_pattern,
-        _nb_renumbered_faces,
-        _nb_sorted_edge_csr,
-        _nb_sym_csr,
-        _nb_umbrella_entries,
         _nb_union_find,
     )
     from meshrepair._kernels.edges import (  # noqa: F401
@@ -158,5 +149,23 @@ if HAVE_NUMBA:
         _nb_min_corner_cos,
         _nb_vertex_normals,
         _tri,
+    )
+    from meshrepair._kernels.patterns import (  # noqa: F401
+        _nb_face_neighbours,
+        _nb_face_side_csr,
+        _nb_product_pattern,
+        _nb_sorted_edge_csr,
+        _nb_sym_csr,
+        _nb_umbrella_entries,
+    )
+    from meshrepair._kernels.tables import (  # noqa: F401
+        _nb_creased_edges,
+        _nb_duplicate_rows,
+        _nb_edge_tables,
+        _nb_fan_counts,
+        _nb_grow,
+        _nb_interior_edges,
+        _nb_permuted_edges,
+        _nb_renumbered_faces,
     )
     from meshrepair._kernels.venergy import _nb_venergy, _nb_venergy_grad, _nb_vhess_diag  # noqa: F401
