@@ -135,21 +135,25 @@ if HAVE_NUMBA:
         return edges, edge_he, inv, counts
 
     @njit(cache=True)
+    def _nb_union(parent, x, y):  # pragma: no cover - compiled
+        # the roots of x and y (path halving), the larger linked under the smaller: every
+        # root is the smallest member of its set
+        while parent[x] != x:
+            parent[x] = parent[parent[x]]
+            x = parent[x]
+        while parent[y] != y:
+            parent[y] = parent[parent[y]]
+            y = parent[y]
+        if x < y:
+            parent[y] = x
+        elif y < x:
+            parent[x] = y
+
+    @njit(cache=True)
     def _nb_union_find(n, a, b):  # pragma: no cover - compiled
         parent = np.arange(n)
         for i in range(a.shape[0]):
-            x, y = a[i], b[i]
-            while parent[x] != x:
-                parent[x] = parent[parent[x]]
-                x = parent[x]
-            while parent[y] != y:
-                parent[y] = parent[parent[y]]
-                y = parent[y]
-            if x != y:
-                if x < y:
-                    parent[y] = x
-                else:
-                    parent[x] = y
+            _nb_union(parent, a[i], b[i])
         # roots are the smallest member: label components in order of their smallest member
         label = np.empty(n, np.int64)
         nc = 0

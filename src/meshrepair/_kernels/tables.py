@@ -16,7 +16,7 @@ from meshrepair._kernels.connectivity import (
 )
 
 if HAVE_NUMBA:
-    from meshrepair._kernels.connectivity import _nb_pair_order
+    from meshrepair._kernels.connectivity import _nb_pair_order, _nb_union
 
 
 def _end_corner(h):
@@ -45,18 +45,8 @@ if HAVE_NUMBA:
         for i in range(h1.shape[0]):
             u1, w1 = h1[i], h1[i] - 2 if h1[i] % 3 == 2 else h1[i] + 1
             w2, u2 = h2[i], h2[i] - 2 if h2[i] % 3 == 2 else h2[i] + 1
-            for t in range(2):
-                x, y = (u1, u2) if t == 0 else (w1, w2)
-                while parent[x] != x:
-                    parent[x] = parent[parent[x]]
-                    x = parent[x]
-                while parent[y] != y:
-                    parent[y] = parent[parent[y]]
-                    y = parent[y]
-                if x < y:
-                    parent[y] = x
-                elif y < x:
-                    parent[x] = y
+            _nb_union(parent, u1, u2)
+            _nb_union(parent, w1, w2)
         fans = np.zeros(n_vertices, np.int64)
         for c in range(n):
             if parent[c] == c:  # one root per group of corners
