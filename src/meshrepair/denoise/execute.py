@@ -226,14 +226,13 @@ def _execute_tested(plan: DenoisePlan, V, F, callback, made_here: bool = False
     q = r.params["discrepancy_ratio"]
     lowered = (None if _dq.accept_weight(q) or not _dq.FALLBACK_WEIGHTS
                else _dq.FALLBACK_WEIGHTS[0])  # the one further solve a call affords
-    if r.stop_reason == "interrupted":
-        pass
-    elif not t.white:
+    done = r.stop_reason == "interrupted"  # a user's stop: the white result is the answer
+    if not done and not t.white:
         r = _execute(plan.if_correlated, V, F, callback, made_here=made_here,
                      outside=lowered, resolve=False)
         r.params["main_solves"] += n_white
         r.params["discrepancy_ratio"] = q
-    elif lowered is not None:
+    elif not done and lowered is not None:
         log.info("outside weight lowered to %g (discrepancy ratio %.3f)", lowered, q)
         r = _execute(pw, V, F, callback, made_here=made_here, outside=lowered)
         r.params["main_solves"] += n_white

@@ -93,11 +93,11 @@ def noise_statistics(V: np.ndarray, F: np.ndarray, topo: Topology | None = None,
     impulse is isolated (a vertex thrown off moves its ring's Laplacian the other way), and
     Gaussian noise has a same-sign outlier pair next to an outlier with probability about
     ``6 · 0.00135``, so neither is affected. Without this, the creases of a CAD part at low
-    noise (and the ridges of a scanned surface) read as impulsive noise: the shared fandisk
-    part with Gaussian noise of 0.05 l̄ reads RMS/MAD 2.26 with every vertex and 0.93 without
-    the coherent outliers, while one tenth of its vertices thrown by 0.5-1.5 l̄ reads 2.24, and
-    the shared impulsive input (twelve, 73 % of the vertices moved) 1.49 and 1.47
-    (``tests/test_noise.py``).
+    noise (and the ridges of a scanned surface) read as impulsive noise: a CAD part with
+    Gaussian noise of 0.05 l̄ reads RMS/MAD 2.26 with every vertex and 0.93 without the
+    coherent outliers, while the same part with one tenth of its vertices thrown by 0.5-1.5 l̄
+    reads 2.24, and impulsive noise moving 73 % of the vertices 1.49 and 1.47
+    (``tests/test_noise_statistics.py``).
 
     Returns
     -------
