@@ -49,3 +49,34 @@ def test_mean_angle_error_of_a_rotated_plane_is_the_rotation_angle():
     assert mean_angle_error(W, V, F, degrees=False) == pytest.approx(th, abs=1e-12)
     assert msae(W, V, F) == pytest.approx(49.0, abs=1e-7)
     assert mean_angle_error(V, V, F) == pytest.approx(0.0, abs=1e-6)
+
+
+def test_min_face_angles_analytic():
+    from meshrepair.metrics import min_face_angles
+
+    V = np.array([[0, 0, 0], [1, 0, 0], [0.5, np.sqrt(3) / 2, 0], [0, 1, 0.0],
+                  [2, 0, 0], [2, 2 * np.tan(np.radians(3)), 0], [5, 5, 5]])
+    F = np.array([[0, 1, 2], [0, 1, 3], [0, 4, 5], [0, 0, 6]])
+    a = min_face_angles(V, F)
+    assert a[:3] == pytest.approx([60.0, 45.0, 3.0])
+    assert a[3] == 0.0  # a zero-length edge: degenerate
+    assert min_face_angles(V, F, degrees=False)[1] == pytest.approx(np.pi / 4)
+    # invariant to rotation, scale and to the vertex order within a face
+    R = np.linalg.qr(np.random.default_rng(0).normal(size=(3, 3)))[0]
+    assert min_face_angles(3.0 * V @ R.T, F[:, [2, 0, 1]]) == pytest.approx(a)
+
+
+def test_msae_faces_mask_is_the_msae_of_the_subset(rng):
+    from meshrepair.errors import MeshRepairError
+
+    V = rng.normal(size=(30, 3))
+    F = rng.integers(0, 30, size=(40, 3))
+    F = F[(F[:, 0] != F[:, 1]) & (F[:, 1] != F[:, 2]) & (F[:, 0] != F[:, 2])]
+    W = V + 0.05 * rng.normal(size=V.shape)
+    mask = np.arange(len(F)) % 3 == 0
+    assert msae(W, V, F, faces=mask) == pytest.approx(msae(W, V, F[mask]))
+    assert msae(W, V, F, faces=np.ones(len(F), bool)) == msae(W, V, F)
+    with pytest.raises(MeshRepairError, match="boolean mask"):
+        msae(W, V, F, faces=np.flatnonzero(mask))
+    with pytest.raises(MeshRepairError, match="no face"):
+        msae(W, V, F, faces=np.zeros(len(F), bool))

@@ -28,7 +28,7 @@ _LAZY = {
     "find_holes": "holes",
     "read_mesh": "io", "write_mesh": "io", "carry_attributes": "io", "write_like_input": "io",
     "distances": "metrics", "msae": "metrics", "mean_angle_error": "metrics",
-    "vertex_error": "metrics",
+    "vertex_error": "metrics", "min_face_angles": "metrics",
     "add_noise": "model.noise", "estimate_noise": "model.noise",
 }
 
@@ -136,6 +136,7 @@ __all__ = [
     "read_mesh",
     "carry_attributes",
     "vertex_error",
+    "min_face_angles",
     "write_like_input",
     "write_mesh",
 ]

@@ -42,7 +42,8 @@ def _faces(F, n_vertices: int, name: str) -> np.ndarray:
     return F.astype(np.int64, copy=False)
 
 
-def msae(V: np.ndarray, V_ref: np.ndarray, F: np.ndarray, *, degrees: bool = True) -> float:
+def msae(V: np.ndarray, V_ref: np.ndarray, F: np.ndarray, *, degrees: bool = True,
+         faces: np.ndarray | None = None) -> float:
     """Mean squared angular error (33) between corresponding face normals.
 
     Parameters
@@ -50,6 +51,8 @@ def msae(V: np.ndarray, V_ref: np.ndarray, F: np.ndarray, *, degrees: bool = Tru
     V, V_ref : (nV, 3) result and ground truth with the same connectivity F
     F : (nF, 3)
     degrees : report in degrees² (default) or radians²
+    faces : (nF,) bool, optional: average over these faces only (for example the well-shaped
+        ones, ``min_face_angles(V_ref, F) >= 5``; see :func:`min_face_angles`)
 
     Returns
     -------
@@ -58,7 +61,50 @@ def msae(V: np.ndarray, V_ref: np.ndarray, F: np.ndarray, *, degrees: bool = Tru
     ang = _normal_angles(V, V_ref, F)
     if degrees:
         ang = np.degrees(ang)
+    if faces is not None:
+        mask = np.asarray(faces)
+        if mask.dtype != bool or mask.shape != ang.shape:
+            raise MeshRepairError(f"faces must be a boolean mask of shape ({len(ang)},), got "
+                                  f"{mask.dtype} {mask.shape}")
+        if not mask.any():
+            raise MeshRepairError("faces selects no face; MSAE of an empty set is undefined")
+        ang = ang[mask]
     return float(np.mean(ang**2))
+
+
+def min_face_angles(V: np.ndarray, F: np.ndarray, *, degrees: bool = True) -> np.ndarray:
+    """The smallest interior angle of every face, ``(nF,)``.
+
+    A face's normal is the direction of ``(v_1 − v_0) × (v_2 − v_0)``; moving one of its
+    vertices by ``δ`` off its plane turns it by about ``δ / h``, ``h`` the face's smallest
+    height, and ``h ≈ ℓ sin(θ_min)`` for its longest edge ``ℓ``. A sliver (``θ_min`` of a few
+    degrees) therefore has a normal that noise of a small fraction of an edge turns by tens of
+    degrees, and the MSAE (33), which weighs every face alike, can be dominated by such faces
+    (``benchmarks/monotone.py`` reports it with and without them).
+
+    Parameters
+    ----------
+    V : (nV, 3) float
+    F : (nF, 3) int
+    degrees : degrees (default) or radians
+
+    Returns
+    -------
+    (nF,) float64; 0 for a degenerate face (a zero-length edge)
+    """
+    V = _points(V, "V")
+    F = _faces(F, len(V), "F")
+    P = V[F]
+    e = P[:, [1, 2, 0]] - P  # e_j = v_{j+1} − v_j
+    length = np.linalg.norm(e, axis=2)
+    ang = np.empty((len(F), 3))
+    for j in range(3):  # the angle at v_j, between e_j and −e_{j−1}
+        a, b = e[:, j], -e[:, j - 1]
+        den = length[:, j] * length[:, j - 1]
+        c = np.einsum("ij,ij->i", a, b) / np.where(den > 0, den, 1.0)
+        ang[:, j] = np.where(den > 0, np.arccos(np.clip(c, -1.0, 1.0)), 0.0)
+    out = ang.min(axis=1)
+    return np.degrees(out) if degrees else out
 
 
 def mean_angle_error(V: np.ndarray, V_ref: np.ndarray, F: np.ndarray, *,
