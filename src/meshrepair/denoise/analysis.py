@@ -59,7 +59,7 @@ is memory-bound there, and the reordering measured 1.33 s instead of 1.76 s per 
 coordinate-dependent ordering, which keeps the rotation test exact to rounding)."""
 
 
-def _plan(V, F, *, digest: bool = True, **options) -> DenoisePlan:
+def _plan(V, F, *, digest: bool = True, probe_result=None, **options) -> DenoisePlan:
     """Read ``(V, F)`` and decide (module docstring); returns the plan, runs no main solve.
 
     When the reading finds correlated noise (an automatic Willmore weight above 1), the plan is
@@ -68,8 +68,10 @@ def _plan(V, F, *, digest: bool = True, **options) -> DenoisePlan:
     only when the white result's residual fails the white-noise test of
     :mod:`meshrepair.denoise.whiteness`. ``digest``: record the digest of ``(V, F)`` that
     :func:`~meshrepair.denoise.execute._execute` checks (off when the caller runs the plan on
-    these arrays at once)."""
-    p = _plan_one(V, F, digest=digest, **options)
+    these arrays at once). ``probe_result``: a robust probe already run on an input of this
+    connectivity and vertex order (:func:`_plan_one`); the plan reads it instead of running
+    its own."""
+    p = _plan_one(V, F, digest=digest, probe_result=probe_result, **options)
     first, p._state.first_probe = p._state.first_probe, None
     if p.willmore_weight <= 1.0 or options.get("willmore_weight") is not None:
         return p
