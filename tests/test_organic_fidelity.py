@@ -79,16 +79,17 @@ def test_gates():
 
 def test_defaults_use_the_rule_and_it_is_scale_free():
     """On a smooth sphere with low white noise along the normals the main run's λ is the
-    rule's, above 1, and the same when the mesh is scaled (γ̂ is in mean edge
-    lengths)."""
+    rule's at the relief-corrected level σ̂, above 1, and the same when the mesh is scaled
+    (γ̂ is in mean edge lengths)."""
     s = trimesh.creation.icosphere(subdivisions=3, radius=1.0)
     V, F = np.asarray(s.vertices, float), np.asarray(s.faces, np.int64)
     V0 = add_noise(V, F, 0.08, direction="normal", seed=3)
     r = denoise(V0, F)
     p = r.params
     assert p["support_fraction"] < CAD_SUPPORT
-    assert p["lam"] == pytest.approx(of.organic_lambda(r.noise_estimate,
-                                                       p["tangential_ratio"]))
+    sigma = of.noise_level(r.noise_estimate, p["gamma_relief"])
+    assert 0.0 < sigma < r.noise_estimate
+    assert p["lam"] == pytest.approx(of.organic_lambda(sigma, p["tangential_ratio"]))
     assert p["lam"] > 1.0
     r2 = denoise(7.5 * V0, F)
     assert r2.params["lam"] == pytest.approx(p["lam"], rel=1e-6)
@@ -109,3 +110,33 @@ def test_low_noise_organic_rows_beat_the_tuned_peers():
         r = denoise(V0, F)
         assert r.params["lam"] > 1.0
         assert msae(r.V, V, F) < 0.97 * peer
+
+
+def test_noise_level_subtracts_the_relief_in_quadrature():
+    """σ̂ = √max(γ̂² − γ̂_relief², 0): independent noise and relief add in variance."""
+    assert of.noise_level(0.05, 0.03) == pytest.approx(0.04)
+    assert of.noise_level(0.1, 0.0) == pytest.approx(0.1)
+    assert of.noise_level(0.03, 0.05) == 0.0  # the probe as rough as the input: no noise read
+    assert of.noise_level(0.07, float("nan")) == 0.07  # no probe: γ̂ itself
+    g = np.linspace(0.0, 0.5, 51)
+    s = np.array([of.noise_level(x, 0.04) for x in g])
+    assert np.all(np.diff(s) >= 0) and np.all(s <= g + 1e-15)
+
+
+def test_relief_corrected_level_reads_the_noise_on_a_smooth_surface():
+    """On an organic mesh (the bundled spot, whose own relief reads γ̂ ≈ 0.05 l̄) with noise of
+    known level along the normals, the plan's σ̂ is nearer the noise level than the one-ring
+    γ̂, for noise below and at the relief's level; the λ of the plan is the law at σ̂."""
+    from .bundled import bundled_mesh
+
+    V, F = bundled_mesh("spot.ply")
+    import meshrepair as mr
+
+    for g in (0.03, 0.05, 0.1):
+        p = mr.plan_denoise(add_noise(V, F, g, seed=3), F)
+        r = p.reading
+        sig = of.noise_level(r["gamma"], r["gamma_relief"])
+        assert abs(sig - g) < abs(r["gamma"] - g)
+        if g >= 0.05:
+            assert abs(sig - g) < 0.25 * g
+        assert p.lam == pytest.approx(of.organic_lambda(sig, r["tangential_ratio"]))

@@ -170,7 +170,7 @@ def _plan_one(V, F, *, lam, th, a, robust_iters, feature_iters, mask_update_ever
     info = {"tangential_ratio": float("nan"), "support_fraction": float("nan"),
             "outside_weight": 1.0,
             "willmore_weight": 1.0, "noise_rho": float("nan"), "noise_length": float("nan"),
-            "noise_gamma_scale": float("nan")}
+            "noise_gamma_scale": float("nan"), "gamma_relief": float("nan")}
     force = flat = anchor = None
     sup = r1 = r1_V = first_probe = None
     sup_v = None  # vertices of the crease-supported region, input order
@@ -252,9 +252,14 @@ def _plan_one(V, F, *, lam, th, a, robust_iters, feature_iters, mask_update_ever
         from meshrepair.denoise import organic_fidelity as _of
 
         if lam is None and _of.applies(sf, ww, w_out, impulsive, ns.rho):
-            lam_used = _of.main_lambda(gamma, tr, info, graded=not presmoothed)
+            g_relief = noise_statistics(r1.V, Fw, topo_w)[0]  # the probe keeps the relief
+            info["gamma_relief"] = g_relief
+            sigma = _of.noise_level(gamma, g_relief)
+            lam_used = _of.main_lambda(sigma, tr, info, graded=not presmoothed)
             opts_kw["lam"] = lam_used
-            rule_lam = "organic_fidelity.main_lambda: λ of an organic mesh with white noise"
+            rule_lam = ("organic_fidelity.main_lambda: λ of an organic mesh with white noise, "
+                        "at the noise level σ̂ = √(γ̂² − γ̂_relief²) (the probe's γ̂ reads the "
+                        "relief)")
         info.update(support_fraction=sf, willmore_weight=ww,
                     noise_rho=ns.rho, noise_length=ns.length, noise_gamma_scale=ns.gamma)
         log.info("crease support on %.1f %% of the edges; noise correlation %.2f (length %.1f, "
@@ -268,6 +273,7 @@ def _plan_one(V, F, *, lam, th, a, robust_iters, feature_iters, mask_update_ever
     lam_reads = {"gamma": gamma}
     if rule_lam.startswith("organic_fidelity"):
         lam_reads["tangential_ratio"] = info["tangential_ratio"]
+        lam_reads["gamma_relief"] = info["gamma_relief"]
     elif "own scale" in rule_lam:
         lam_reads["gamma_scale"] = info["noise_gamma_scale"]
     dec.insert(0, Decision("lam", lam_used, "set by the user" if lam is not None else rule_lam,
@@ -311,6 +317,8 @@ def _plan_one(V, F, *, lam, th, a, robust_iters, feature_iters, mask_update_ever
                "folded_faces": n_unf, **{k: info[k] for k in
                                          ("tangential_ratio", "support_fraction", "noise_rho",
                                           "noise_length", "noise_gamma_scale")}}
+    if np.isfinite(info["gamma_relief"]):  # read where the organic law's σ̂ needs it
+        reading["gamma_relief"] = info["gamma_relief"]
     return DenoisePlan(
         n_vertices=len(V), n_faces=len(F), options=options, reading=reading, lam=lam_used,
         huber_delta=delta, willmore_weight=ww, outside_weight=w_out, inner_iters=inner_iters,

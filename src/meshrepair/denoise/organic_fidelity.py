@@ -15,7 +15,7 @@ deserve the larger weight. On meshes that are not CAD parts
 (Willmore weight 1 and correlation ratio ``ρ <`` :data:`RHO_WHITE`), non-impulsive noise, the
 main run uses
 
-.. math:: λ = \\max(c / γ̂^2,\\; 0.05), \\qquad
+.. math:: λ = \\max(c / σ̂^2,\\; 0.05), \\qquad
           c = \\begin{cases} 0.04 & r_t < 0.65 \\\\ 0.08 & r_t \\ge 0.65, \\end{cases}
 
 (:func:`organic_lambda`), twice the default for noise along the normals (``c = 0.04``
@@ -29,6 +29,22 @@ that decides the crease support keeps the default: its decisions do not change.
 Correlated noise that the Willmore rule misses (it reads ``r_t ≥ 0.65``) reads ``ρ ≥ 1.42``
 on the benchmark grid, white noise ``ρ ≤ 1.36``: hence :data:`RHO_WHITE` = 1.4 between them (a
 larger λ keeps correlated bumps).
+
+**Noise level.** The likelihood's ``σ`` is the level of the noise, while ``γ̂`` (a MAD of the
+normal part of the umbrella Laplacian) reads the noise *and* the surface's own relief at the
+one-ring scale (a clean organic mesh reads 0.03-0.05). The two are independent, so their
+variances add: ``γ̂² ≈ σ² + γ̂_relief²``. The probe's result (the robust stage of the one probe,
+:mod:`meshrepair.denoise.analysis`) keeps the relief and little of the noise, and the same
+estimator read on it gives ``γ̂_relief``; the law then reads
+
+.. math:: σ̂ = \\sqrt{\\max(γ̂^2 − γ̂_{relief}^2,\\; 0)}
+
+(:func:`noise_level`) in place of ``γ̂``. On the shared organic meshes with noise along the
+normals of 0.05 l̄, γ̂ reads 0.057-0.085 and σ̂ 0.047-0.063; with random directions (normal part
+0.029 l̄) γ̂ reads 0.037-0.071 and σ̂ 0.023-0.045; at 0.2 l̄ they differ by 1-5 % (the probe's
+reading is then small against γ̂). A clean input reads σ̂ near 0 and
+keeps its data (λ large). What the probe leaves of the noise enters ``γ̂_relief`` too, so σ̂
+errs low, towards keeping the data.
 
 **Graded by the tangential ratio** (:func:`tangential_gain`). The tangential ratio
 ``r_t`` is the robust level of the tangential part of the input's high-passed umbrella residual
@@ -80,6 +96,15 @@ GAIN_RATIO_MAX = 2.5
 grid reads at most about 2.3; above it the robust levels are not a measurement (a 4-vertex
 tetrahedron, with no vertex two rings inside, reads 18.6, and a gain there would keep a
 collapsed result) and the gain is 1."""
+
+
+def noise_level(gamma: float, gamma_relief: float) -> float:
+    """``σ̂ = √(max(γ̂² − γ̂_relief², 0))``: the level of the noise alone (module docstring,
+    *Noise level*), mean edge lengths; ``γ̂`` when ``γ̂_relief`` is not finite."""
+    g, r = float(gamma), float(gamma_relief)
+    if not np.isfinite(r):
+        return g
+    return float(np.sqrt(max(g * g - r * r, 0.0)))
 
 
 def organic_lambda(gamma: float, tangential: float = 0.0, *, graded: bool = True) -> float:
