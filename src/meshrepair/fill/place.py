@@ -45,11 +45,29 @@ def _enclose_methods(hole) -> list[str]:
     return out or ["auto"]
 
 CREASE_TRIAL = True
-"""A hole whose patch has crease routes (and does not intersect the surface) is also faired
-without them, and the patch with the smaller seam angle (mean dihedral across the loop edges)
-is kept: a wrong pairing or corner of the crease ends bends the patch away from its surround's
-tangent planes, which the seam shows, while creases continued where they run leave a seam at
-most as sharp as the smooth patch's, which cannot follow the crease ends."""
+"""A hole whose crease routes include a loosely inferred one (:func:`_loose`) and whose patch
+does not intersect the surface is also faired without them, and the patch with the smaller seam
+angle (mean dihedral across the loop edges) is kept: a wrong pairing or corner of the crease
+ends bends the patch away from its surround's tangent planes, which the seam shows. Routes
+inferred tightly (pairs along their chord, corners of at most three arms) are kept as they are:
+on small holes the seam of the faired patch does not tell them from the smooth patch."""
+
+CORNER_MAX_ARMS = 3
+"""A corner with more arms than this is a loose inference (the arms beyond the two meeting
+exactly only point at the corner within 45°)."""
+
+
+def _loose(route, k: int) -> bool:
+    """True when a crease route of a ``k``-vertex loop has a kinked pair (ends within 60° of
+    their chord) or a corner point (numbered ``k, k + 1, ...``) with more than
+    :data:`CORNER_MAX_ARMS` arms."""
+    if "kinked" in route.kinds:
+        return True
+    seg = np.asarray(route.segments).reshape(-1, 2)
+    if len(route.points) == 0 or len(seg) == 0:
+        return False
+    arms = np.bincount(seg[seg >= k] - k, minlength=len(route.points))
+    return bool((arms > CORNER_MAX_ARMS).any())
 
 BLEND_STEPS = (0.5, 0.25)
 """When the faired patch intersects the surround, these fractions of the fairing (from the
@@ -98,6 +116,7 @@ def _place_patches(V: np.ndarray, F: np.ndarray, holes, skip: dict[int, str], *,
     routed_seam: dict[int, float] = {}  # hole -> seam angle of its patch with crease routes
     no_routes: set[int] = set()  # holes enclosed without their crease routes
     route_done: set[int] = set()  # holes whose crease trial is decided
+    route_stage: dict[int, int] = {}  # hole -> its enclosing stage with the routes
 
     def _seen(i: int, n_x: int, frac: float) -> None:
         st = stage.get(i, 0)
@@ -185,6 +204,13 @@ def _place_patches(V: np.ndarray, F: np.ndarray, holes, skip: dict[int, str], *,
                     log.warning("hole %d: %s", i, note)
                     continue
                 n_x = _intersecting(V1, F1, bf, dropped, pairs=pairs0)
+                if n_x and i in no_routes and i not in route_done:
+                    # the patch without crease routes intersects: back to the routed one
+                    route_done.add(i)
+                    no_routes.discard(i)
+                    goto[i] = route_stage[i]
+                    again = True
+                    continue
                 _seen(i, n_x, 1.0)
                 if n_x and initial == "bilaplacian":
                     # keep as much of the fairing as stays clear of the surround: the patch
@@ -214,12 +240,15 @@ def _place_patches(V: np.ndarray, F: np.ndarray, holes, skip: dict[int, str], *,
                         if not n_x:
                             rep.reason += f", {unfaired}"
                 if not n_x and CREASE_TRIAL and i not in route_done and (
-                        i in no_routes or (rep.n_creases > 0 and i not in locked)):
+                        i in no_routes or (rep.n_creases > 0 and i not in locked
+                                           and i in routes
+                                           and _loose(routes[i], by_index[i].n_boundary))):
                     # choose by measurement: the patch with crease routes against the patch
                     # faired without them, the smoother seam kept
                     seam = _seam_angle(V1, F1, bf, nF)
                     if i not in no_routes:
                         routed_seam[i] = seam
+                        route_stage[i] = stage.get(i, 0)
                         no_routes.add(i)
                         locked.add(i)
                         again = True
@@ -227,6 +256,7 @@ def _place_patches(V: np.ndarray, F: np.ndarray, holes, skip: dict[int, str], *,
                         route_done.add(i)
                         if not seam < routed_seam[i]:
                             no_routes.discard(i)
+                            goto[i] = route_stage[i]
                             again = True
                         log.info("hole %d: seam %.2f° with crease routes, %.2f° without; "
                                  "keeping the patch %s them", i, routed_seam[i], seam,
