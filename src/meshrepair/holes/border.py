@@ -152,9 +152,11 @@ def classify_loops(V: np.ndarray, F: np.ndarray, holes: Sequence[Hole]
                               f"(winding {w:.2f} >= {ENCLOSED:g}): filled as a hole; keep it "
                               f"open with exclude=[{h.index}] (CLI --exclude {h.index})")
             continue
+        limit = ENCLOSED if both else UNCERTAIN
         out[h.index] = (f"open border of the surface ({h.n_boundary} edges; its projected area "
                         f"is {ra:.2f} of the surface's, L²/4π is {ri:.2f} of it, borders are at "
                         f">= {BORDER_AREA_RATIO:g} or >= {BORDER_ISO_RATIO:g}; the rest of the "
-                        f"surface does not enclose it: winding {w:.2f} < {ENCLOSED:g}): left "
-                        f"open; fill it anyway with holes=[{h.index}] (CLI --holes {h.index})")
+                        f"surface does not enclose it: winding {w:.2f} < {limit:g}"
+                        f"{'' if both else ', large by one measure only'}): left open; fill it "
+                        f"anyway with holes=[{h.index}] (CLI --holes {h.index})")
     return out, enclosure, notes
