@@ -39,11 +39,17 @@ from meshrepair.metrics import distances
 MESHREPAIR_OPTIONS: dict = {}
 """Keyword options of meshrepair's ``fill_holes`` in the benchmarks (``holes.py --fitted``)."""
 
+LAST_NOTES: list[str] = []
+"""The skipped loops and the notes of meshrepair's last fill (index, edges, status, reason,
+note), for the protocol's records."""
+
 
 def _meshrepair(V, F, hc):
     from meshrepair.fill import fill_holes
 
     r = fill_holes(V, F, **MESHREPAIR_OPTIONS)
+    LAST_NOTES[:] = [f"{h.index} ({h.n_boundary} edges) {h.status}: {h.reason}; {h.note}"
+                     for h in r.holes if h.status != "filled" or h.note]
     return r.V, r.F
 
 

@@ -9,7 +9,7 @@ mesh's own real holes or open border is not counted) are compared with the remov
 symmetric mean distance / bounding-box diagonal and mean normal deviation
 (:func:`_holes_peers.measure`), wall time and resident-memory high-water mark above the RSS
 before the fill. Holes a method leaves open count as not filled (``filled`` column: cut loops
-closed / cut loops).
+closed / cut loops); meshrepair's records also list its skipped loops and notes (``notes``).
 
 Peers: CGAL refine-and-fair, MeshLib ``fillHole`` (minimum-area triangulation, no refinement)
 and ``fillHoleNicely``, PyMeshLab ``meshing_close_holes`` (refined, every hole), pymeshfix.
@@ -135,6 +135,8 @@ def run_protocol(lines: list[str], notes: list[str], meshes, radii, seeds, out_j
                                                         diag, le)
                         c, n = _cut_loops_closed(Vc, Fc, Vo, Fo, cut_v)
                         rec.update(mean=mm, normal=nd, closed=c, loops=n)
+                        if m == "meshrepair" and hp.LAST_NOTES:
+                            rec["notes"] = list(hp.LAST_NOTES)
                     else:
                         rec["error"] = err
                     recs.append(rec)

@@ -106,6 +106,41 @@ def test_closed_cad_part_hole_kept_when_every_patch_intersects():
     assert "note:" in res.summary()
 
 
+@pytest.mark.parametrize(("radius", "seed"), [(16, 2), (24, 2)])
+def test_piece_cut_off_a_closed_body_is_filled_with_a_note(radius, seed):
+    """spot (closed) with three discs cut: a piece of the body is cut off, one-sided enough that
+    its loop is large by the vector-area measure (0.67-0.68 of its area) but not by the
+    isoperimetric one, and partly enclosed (winding 0.67-0.76): uncertain, so it is filled with a
+    note; every cut loop is closed."""
+    V, F = _read("spot.ply")
+    Vc, Fc, _, _ = cut_holes(V, F, radius, seed=seed)
+    holes = find_holes(Vc, Fc)
+    borders, enc, notes = classify_loops(Vc, Fc, holes)
+    assert borders == {}
+    assert any(0.6 <= w < ENCLOSED for w in enc.values())
+    res = fill_holes(Vc, Fc)
+    assert res.n_skipped == 0, res.summary()
+    assert len(boundary_loops(res.F)) == 0
+    assert any("uncertain" in h.note for h in res.holes)
+
+
+def test_bowl_large_by_one_measure_is_uncertain_a_flat_sheet_is_a_border():
+    """A spherical bowl (the sphere below z = -0.3): vector area 0.65 of its area, L²/4π 0.65,
+    winding about 0.8: filled, with a note saying it is uncertain. A flat sheet (vector area
+    about 1, winding about 0.5) stays an open border."""
+    s = trimesh.creation.icosphere(4)
+    V, F = np.asarray(s.vertices), np.asarray(s.faces, np.int64)
+    Fb = F[(V[F][:, :, 2] < -0.3).all(axis=1)]
+    holes = find_holes(V, Fb)
+    borders, enc, notes = classify_loops(V, Fb, holes)
+    assert borders == {} and 0.6 <= enc[0] < ENCLOSED and "uncertain" in notes[0]
+    res = fill_holes(V, Fb)
+    assert res.holes[0].status == "filled" and "uncertain" in res.holes[0].note
+    Vg, Fg = grid(25)
+    borders, _, _ = classify_loops(Vg, Fg, find_holes(Vg, Fg))
+    assert list(borders) == [0]
+
+
 @pytest.mark.shared
 @pytest.mark.parametrize("name", ["kinect_pyramid.ply", "scans/rabbit_scan.ply"])
 def test_open_scan_outer_border_left_open_by_default(name):
@@ -157,3 +192,19 @@ def test_partly_enclosed_hole_is_filled_and_called_uncertain():
     h0 = res.holes[0]
     assert h0.status == "filled" and "uncertain" in h0.note, res.summary()
     assert all(h.status == "filled" for h in res.holes if h.n_boundary > 3)
+
+
+@pytest.mark.shared
+def test_crease_routes_kept_only_where_the_seam_is_smoother():
+    """twelve (a dodecahedron) cut at 16 l̄, seed 1: the crease ends of each hole are joined into
+    a corner or a kinked pair that the solid does not have; faired without the routes, the patch
+    meets its surround more smoothly, so no route is kept. At 8 l̄ (seed 0) the routes rebuild
+    the corners and are kept."""
+    V, F = shared_mesh("twelve.ply")
+    crease = _crease_centre(V, F)
+    Vc, Fc, _, _ = cut_holes(V, F, 16, seed=1, centres=[crease])
+    res = fill_holes(Vc, Fc)
+    assert res.n_skipped == 0 and all(h.n_creases == 0 for h in res.holes), res.summary()
+    Vc, Fc, _, _ = cut_holes(V, F, 8, seed=0, centres=[crease])
+    res = fill_holes(Vc, Fc)
+    assert sum(h.n_creases > 0 for h in res.holes) == 3, res.summary()

@@ -155,7 +155,7 @@ def fill_holes(
     # uncertain: partly enclosed, not a border by size; an intersecting patch is kept and said
     uncertain = {i for i, w in enclosure.items()
                  if UNCERTAIN <= w < ENCLOSED and i not in borders and i not in known}
-    for i in uncertain:
+    for i in uncertain - set(notes):
         notes[i] = (f"uncertain: the rest of the surface encloses it only partly (winding "
                     f"{enclosure[i]:.2f}; holes of closed bodies >= {ENCLOSED:g}): filled; "
                     f"check it, or keep it open with exclude=[{i}] (CLI --exclude {i})")

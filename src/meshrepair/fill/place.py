@@ -44,6 +44,31 @@ def _enclose_methods(hole) -> list[str]:
     out = [m for m in ENCLOSE_ORDER if m != "liepa" or hole.n_boundary <= LIEPA_MAX_LOOP]
     return out or ["auto"]
 
+CREASE_TRIAL = True
+"""A hole whose crease routes include a loosely inferred one (:func:`_loose`) and whose patch
+does not intersect the surface is also faired without them, and the patch with the smaller seam
+angle (mean dihedral across the loop edges) is kept: a wrong pairing or corner of the crease
+ends bends the patch away from its surround's tangent planes, which the seam shows. Routes
+inferred tightly (pairs along their chord, corners of at most three arms) are kept as they are:
+on small holes the seam of the faired patch does not tell them from the smooth patch."""
+
+CORNER_MAX_ARMS = 3
+"""A corner with more arms than this is a loose inference (the arms beyond the two meeting
+exactly only point at the corner within 45°)."""
+
+
+def _loose(route, k: int) -> bool:
+    """True when a crease route of a ``k``-vertex loop has a kinked pair (ends within 60° of
+    their chord) or a corner point (numbered ``k, k + 1, ...``) with more than
+    :data:`CORNER_MAX_ARMS` arms."""
+    if "kinked" in route.kinds:
+        return True
+    seg = np.asarray(route.segments).reshape(-1, 2)
+    if len(route.points) == 0 or len(seg) == 0:
+        return False
+    arms = np.bincount(seg[seg >= k] - k, minlength=len(route.points))
+    return bool((arms > CORNER_MAX_ARMS).any())
+
 BLEND_STEPS = (0.5, 0.25)
 """When the faired patch intersects the surround, these fractions of the fairing (from the
 initial surface) are tried before the initial surface itself."""
@@ -71,7 +96,8 @@ def _place_patches(V: np.ndarray, F: np.ndarray, holes, skip: dict[int, str], *,
     ``known_holes``: loops known to be holes (the rest of the surface encloses them, or the
     caller selected them): never refused; a patch lying on the surface, or still intersecting
     it after every enclosing method, is kept, with a note in its report. ``kept_holes``: more
-    loops whose intersecting patch is kept with a note (the uncertain ones)."""
+    loops whose patch is kept with a note when it intersects or lies on the surface (the
+    uncertain ones: filled, and the report says what to check)."""
     nV, nF = len(V), len(F)
     by_index = {h.index: h for h in holes}
     stage: dict[int, int] = {}  # hole index -> position in its list of enclosing methods
@@ -85,6 +111,12 @@ def _place_patches(V: np.ndarray, F: np.ndarray, holes, skip: dict[int, str], *,
     fewest: dict[int, tuple[int, int, float]] = {}  # hole -> (pairs, stage, fraction faired)
     final: dict[int, float] = {}  # hole -> fraction of the fairing to apply, no more trials
     goto: dict[int, int] = {}  # hole -> stage to enclose it with on the next pass
+    # crease trial: a hole with crease routes is faired again without them, and the patch
+    # meeting its surround more smoothly is kept (CREASE_TRIAL)
+    routed_seam: dict[int, float] = {}  # hole -> seam angle of its patch with crease routes
+    no_routes: set[int] = set()  # holes enclosed without their crease routes
+    route_done: set[int] = set()  # holes whose crease trial is decided
+    route_stage: dict[int, int] = {}  # hole -> its enclosing stage with the routes
 
     def _seen(i: int, n_x: int, frac: float) -> None:
         st = stage.get(i, 0)
@@ -99,7 +131,9 @@ def _place_patches(V: np.ndarray, F: np.ndarray, holes, skip: dict[int, str], *,
             sharp_v = np.flatnonzero(_sharp_vertices(V, F, th, nV))
         V1, F1, reports = enclose_holes(
             V, F, holes, skip, edge_length=edge_length, check=check, intersections=False,
-            method=method, creases=routes, known_holes=known_holes, unpair=set(unpair),
+            method=method, creases={i: r for i, r in routes.items() if i not in no_routes},
+            known_holes=set(known_holes) | set(kept_holes),
+            unpair=set(unpair),
             progress=None if progress is None or not first else progress)
         first = False
         tb = time.perf_counter()
@@ -170,6 +204,13 @@ def _place_patches(V: np.ndarray, F: np.ndarray, holes, skip: dict[int, str], *,
                     log.warning("hole %d: %s", i, note)
                     continue
                 n_x = _intersecting(V1, F1, bf, dropped, pairs=pairs0)
+                if n_x and i in no_routes and i not in route_done:
+                    # the patch without crease routes intersects: back to the routed one
+                    route_done.add(i)
+                    no_routes.discard(i)
+                    goto[i] = route_stage[i]
+                    again = True
+                    continue
                 _seen(i, n_x, 1.0)
                 if n_x and initial == "bilaplacian":
                     # keep as much of the fairing as stays clear of the surround: the patch
@@ -198,6 +239,29 @@ def _place_patches(V: np.ndarray, F: np.ndarray, holes, skip: dict[int, str], *,
                         log.debug("hole %d (%s): %s, %d face pairs", i, method[i], unfaired, n_x)
                         if not n_x:
                             rep.reason += f", {unfaired}"
+                if not n_x and CREASE_TRIAL and i not in route_done and (
+                        i in no_routes or (rep.n_creases > 0 and i not in locked
+                                           and i in routes
+                                           and _loose(routes[i], by_index[i].n_boundary))):
+                    # choose by measurement: the patch with crease routes against the patch
+                    # faired without them, the smoother seam kept
+                    seam = _seam_angle(V1, F1, bf, nF)
+                    if i not in no_routes:
+                        routed_seam[i] = seam
+                        route_stage[i] = stage.get(i, 0)
+                        no_routes.add(i)
+                        locked.add(i)
+                        again = True
+                    else:
+                        route_done.add(i)
+                        if not seam < routed_seam[i]:
+                            no_routes.discard(i)
+                            goto[i] = route_stage[i]
+                            again = True
+                        log.info("hole %d: seam %.2f° with crease routes, %.2f° without; "
+                                 "keeping the patch %s them", i, routed_seam[i], seam,
+                                 "without" if i in no_routes else "with")
+                    continue
                 if not n_x:
                     # choose by measurement: a planar patch meeting its surround at a kink is
                     # tried again with Liepa's triangulation, and the smoother seam is kept

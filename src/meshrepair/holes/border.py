@@ -19,6 +19,15 @@ A crack running all the way round a sphere has ``L² / 4πA = 1``, a single-view
 of a square has ``va / A ≈ 1`` and ``L² / 4πA ≥ 4/π``. Both thresholds leave a factor of at least
 1.35 on either side on the shared meshes.
 
+The two size measures say different things: the vector area measures how one-sided the surface
+is (a surface seen from one side, as a scan is, projects onto its border's plane with little
+overlap; a body closed apart from its holes has a vector area of only the holes' own projected
+area, its normals cancel), the isoperimetric area how long the loop is. A scan's border is large
+in both; a loop that only one of them calls large (a long loop of a body whose normals cancel, or
+a short loop bounding a one-sided piece of surface) is left open only when the rest of the
+surface clearly does not enclose it (enclosure below :data:`UNCERTAIN`); between
+:data:`UNCERTAIN` and :data:`ENCLOSED` it is uncertain, and filled with a note.
+
 A loop the size rule calls a border is still a *hole* when the rest of the surface encloses the
 region it bounds (:func:`meshrepair.holes.closure.loop_enclosure` at least
 :data:`ENCLOSED`): a body closed apart from its holes is never left open because one of them
@@ -52,10 +61,11 @@ ENCLOSED = 0.84
 a hole of a body closed apart from its holes: never a border, never refused."""
 
 UNCERTAIN = 0.6
-"""A loop the size rule does not call a border, with an enclosure between this and
-:data:`ENCLOSED`, is uncertain: filled, and a patch intersecting the surface after every
-enclosing method is kept with a note (below it, such a patch is refused). The smallest
-enclosure of a hole of a closed body measured on the shared meshes is 0.82."""
+"""A loop the size rule does not call a border, or calls one by only one of its two measures,
+with an enclosure between this and :data:`ENCLOSED`, is uncertain: filled, and a patch
+intersecting the surface after every enclosing method is kept with a note (below it, such a
+patch is refused). The smallest enclosure of a hole of a closed body measured on the shared
+meshes is 0.82; the borders of the open scans, large by both measures, are at 0.75-0.79."""
 
 
 def component_areas(V: np.ndarray, F: np.ndarray, comp: np.ndarray) -> np.ndarray:
@@ -126,15 +136,27 @@ def classify_loops(V: np.ndarray, F: np.ndarray, holes: Sequence[Hole]
         if not (ra >= BORDER_AREA_RATIO or ri >= BORDER_ISO_RATIO):
             continue
         w = enclosure.get(h.index, 0.0)
+        both = ra >= BORDER_AREA_RATIO and ri >= BORDER_ISO_RATIO
+        if not both and w >= UNCERTAIN and w < ENCLOSED:
+            notes[h.index] = (f"uncertain: large loop by one size measure only (projected area "
+                              f"{ra:.2f} of the surface's, L²/4π {ri:.2f} of it; an open "
+                              f"border is at >= {BORDER_AREA_RATIO:g} and >= "
+                              f"{BORDER_ISO_RATIO:g}) and partly enclosed by the rest of the "
+                              f"surface (winding {w:.2f}, holes of closed bodies >= "
+                              f"{ENCLOSED:g}): filled; check it, or keep it open with "
+                              f"exclude=[{h.index}] (CLI --exclude {h.index})")
+            continue
         if w >= ENCLOSED:
             notes[h.index] = (f"large loop (projected area {ra:.2f} of the surface's, L²/4π "
                               f"{ri:.2f} of it) but the rest of the surface encloses it "
                               f"(winding {w:.2f} >= {ENCLOSED:g}): filled as a hole; keep it "
                               f"open with exclude=[{h.index}] (CLI --exclude {h.index})")
             continue
+        limit = ENCLOSED if both else UNCERTAIN
         out[h.index] = (f"open border of the surface ({h.n_boundary} edges; its projected area "
                         f"is {ra:.2f} of the surface's, L²/4π is {ri:.2f} of it, borders are at "
                         f">= {BORDER_AREA_RATIO:g} or >= {BORDER_ISO_RATIO:g}; the rest of the "
-                        f"surface does not enclose it: winding {w:.2f} < {ENCLOSED:g}): left "
-                        f"open; fill it anyway with holes=[{h.index}] (CLI --holes {h.index})")
+                        f"surface does not enclose it: winding {w:.2f} < {limit:g}"
+                        f"{'' if both else ', large by one measure only'}): left open; fill it "
+                        f"anyway with holes=[{h.index}] (CLI --holes {h.index})")
     return out, enclosure, notes
