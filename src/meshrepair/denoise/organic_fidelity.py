@@ -32,7 +32,7 @@ larger λ keeps correlated bumps).
 
 **Noise level.** The likelihood's ``σ`` is the level of the noise, while ``γ̂`` (a MAD of the
 normal part of the umbrella Laplacian) reads the noise *and* the surface's own relief at the
-one-ring scale (a clean organic mesh reads 0.03-0.05). The two are independent, so their
+one-ring scale (the clean shared organic meshes read 0.025-0.053). The two are independent, so their
 variances add: ``γ̂² ≈ σ² + γ̂_relief²``. The probe's result (the robust stage of the one probe,
 :mod:`meshrepair.denoise.analysis`) keeps the relief and little of the noise, and the same
 estimator read on it gives ``γ̂_relief``; the law then reads
