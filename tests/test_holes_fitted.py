@@ -13,15 +13,13 @@ from meshrepair.holes.fitted import (
     fit_surround,
     hole_rings,
 )
+from meshrepair.synthetic import grid_plane
 
 
 def _grid(n: int = 41, half: float = 1.0):
-    x, y = np.meshgrid(np.linspace(-half, half, n), np.linspace(-half, half, n))
-    V = np.c_[x.ravel(), y.ravel(), np.zeros(n * n)]
-    idx = np.arange(n * n).reshape(n, n)
-    a, b = idx[:-1, :-1].ravel(), idx[:-1, 1:].ravel()
-    c, d = idx[1:, :-1].ravel(), idx[1:, 1:].ravel()
-    F = np.r_[np.c_[a, b, d], np.c_[a, d, c]].astype(np.int64)
+    """:func:`meshrepair.synthetic.grid_plane` scaled to the square [-half, half]²."""
+    V, F = grid_plane(n)
+    V[:, :2] = V[:, :2] * (2.0 * half / (n - 1)) - half
     return V, F
 
 

@@ -8,6 +8,7 @@ import pytest
 from meshrepair.fill import fill_holes
 from meshrepair.holes import fair_vertices
 from meshrepair.holes.triharmonic import _rings, fair_triharmonic
+from meshrepair.synthetic import grid_plane
 
 
 def _sphere_with_cap_removed(z_cut: float, level: int = 4):
@@ -20,12 +21,9 @@ def _sphere_with_cap_removed(z_cut: float, level: int = 4):
 
 
 def _grid(n: int = 21):
-    x, y = np.meshgrid(np.linspace(-1, 1, n), np.linspace(-1, 1, n))
-    V = np.c_[x.ravel(), y.ravel(), np.zeros(n * n)]
-    idx = np.arange(n * n).reshape(n, n)
-    a, b = idx[:-1, :-1].ravel(), idx[:-1, 1:].ravel()
-    c, d = idx[1:, :-1].ravel(), idx[1:, 1:].ravel()
-    F = np.r_[np.c_[a, b, d], np.c_[a, d, c]].astype(np.int64)
+    """:func:`meshrepair.synthetic.grid_plane` scaled to the square [-1, 1]²."""
+    V, F = grid_plane(n)
+    V[:, :2] = V[:, :2] * (2.0 / (n - 1)) - 1.0
     return V, F
 
 

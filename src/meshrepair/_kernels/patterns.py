@@ -85,6 +85,17 @@ def _np_face_side_csr(face_edges, edge_faces, ok):
 if HAVE_NUMBA:
 
     @njit(cache=True)
+    def _nb_sort_small(buf, m):  # pragma: no cover - compiled
+        """Sort ``buf[:m]`` ascending in place (insertion sort: m ≤ 4 here)."""
+        for i in range(1, m):
+            x = buf[i]
+            j = i - 1
+            while j >= 0 and buf[j] > x:
+                buf[j + 1] = buf[j]
+                j -= 1
+            buf[j + 1] = x
+
+    @njit(cache=True)
     def _nb_face_side_csr(face_edges, edge_faces, ok):  # pragma: no cover - compiled
         nF = face_edges.shape[0]
         indptr = np.empty(nF + 1, np.int64)
@@ -101,13 +112,7 @@ if HAVE_NUMBA:
                     g = edge_faces[e, 0]
                     buf[m] = edge_faces[e, 1] if g == f else g
                     m += 1
-            for i in range(1, m):  # sorted, duplicates dropped
-                x = buf[i]
-                j = i - 1
-                while j >= 0 and buf[j] > x:
-                    buf[j + 1] = buf[j]
-                    j -= 1
-                buf[j + 1] = x
+            _nb_sort_small(buf, m)  # sorted, duplicates dropped
             for i in range(m):
                 if i == 0 or buf[i] != buf[i - 1]:
                     idx[k] = buf[i]
@@ -246,20 +251,8 @@ if HAVE_NUMBA:
                     else:
                         up[b] = e
                         b += 1
-            for i in range(1, a):
-                x = lo[i]
-                j = i - 1
-                while j >= 0 and lo[j] > x:
-                    lo[j + 1] = lo[j]
-                    j -= 1
-                lo[j + 1] = x
-            for i in range(1, b):
-                x = up[i]
-                j = i - 1
-                while j >= 0 and up[j] > x:
-                    up[j + 1] = up[j]
-                    j -= 1
-                up[j + 1] = x
+            _nb_sort_small(lo, a)
+            _nb_sort_small(up, b)
             for i in range(a):
                 nb[f, i] = edge_faces[lo[i], 1]
                 fe[f, i] = pos[lo[i]]
