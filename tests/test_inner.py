@@ -36,51 +36,6 @@ def test_gradient_matches_finite_differences(rng):
     assert rel < 1e-5
 
 
-def test_fold_term_gradient_matches_finite_differences(rng):
-    """The fold term ``min(0, ⟨y, c⟩)²`` (some target normals reversed, so that those faces
-    are folded) and its Jacobi scale: gradient against central differences, Jacobi scale of the
-    compiled and numpy kernels equal."""
-    from meshrepair import _kernels as K
-
-    prob, V, F, N, rho2, beta2, wfid = _problem(rng)
-    flip = np.where(rng.random(len(F)) < 0.2, -1.0, 1.0)[:, None]
-    prob.set(prob.V0, wfid, rho2 - beta2 * N * flip, np.sqrt(0.5 * beta2) * N * flip)
-    assert np.sum(np.einsum("ij,ij->i", flip * N, face_normals(V, F)) < 0) > 10
-    e, g = prob.energy_grad(V)
-    assert e == pytest.approx(prob.energy(V))
-    h = 1e-6
-    num = np.zeros_like(V)
-    for i in range(len(V)):
-        for k in range(3):
-            Vp = V.copy()
-            Vp[i, k] += h
-            Vm = V.copy()
-            Vm[i, k] -= h
-            num[i, k] = (prob.energy(Vp) - prob.energy(Vm)) / (2 * h)
-    assert np.linalg.norm(num - g) / np.linalg.norm(g) < 1e-5
-    hd = K.vhess_diag(V, F, prob.z, prob.y, wfid)
-    assert np.allclose(hd, K._np_vhess_diag(V, F, prob.z, prob.y, wfid), rtol=1e-12)
-    assert np.all(hd >= K.vhess_diag(V, F, prob.z, np.zeros_like(prob.y), wfid))
-
-
-def test_folded_face_is_not_stationary():
-    """A face exactly opposite its target normal: the normal term's gradient vanishes there,
-    the fold term's does not (it raises the signed area along N)."""
-    V = np.array([[0.0, 0, 0], [1, 0, 0], [0, 1, 0]])
-    F = np.array([[0, 1, 2]])
-    N = np.array([[0.0, 0, -1]])
-    prob = VSubproblem(F, 3)
-    prob.set(V.copy(), np.zeros(3), -3.0 * N)
-    assert np.abs(prob.energy_grad(V)[1]).max() < 1e-15
-    prob.set(V.copy(), np.zeros(3), -3.0 * N, np.sqrt(3.0) * N)
-    e, g = prob.energy_grad(V)
-    assert np.abs(g).max() > 0.5
-    c = np.cross(V[1] - V[0], V[2] - V[0])
-    dc = np.cross(V[1] - g[1] * 1e-3 - V[0] + g[0] * 1e-3, V[2] - g[2] * 1e-3 - V[0]
-                  + g[0] * 1e-3)
-    assert N[0] @ dc > N[0] @ c  # a descent step unfolds
-
-
 def test_energy_is_26_up_to_constant(rng):
     prob, V, F, N, rho2, beta2, wfid = _problem(rng)
     V2 = V + 0.01 * rng.normal(size=V.shape)

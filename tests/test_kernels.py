@@ -26,16 +26,15 @@ def mesh(rng):
 def test_energy_gradient_kernels_agree(mesh, rng):
     V, F = mesh
     z = rng.normal(size=(len(F), 3))
-    y = rng.normal(size=(len(F), 3))  # the fold term active on about half the faces
     V0 = V + 0.1 * rng.normal(size=V.shape)
     w = rng.random(len(V))
     S = sp.csr_matrix((np.ones(3 * len(F)), (F.T.ravel(), np.arange(3 * len(F)))),
                       shape=(len(V), 3 * len(F)))
-    e1 = K._nb_venergy(V, F, z, y, V0, w)
-    e2 = K._np_venergy(V, F, z, y, V0, w)
+    e1 = K._nb_venergy(V, F, z, V0, w)
+    e2 = K._np_venergy(V, F, z, V0, w)
     g1 = np.empty_like(V)
-    e3 = K._nb_venergy_grad(V, F, z, y, V0, w, g1)
-    e4, g2 = K._np_venergy_grad(V, F, z, y, V0, w, S)
+    e3 = K._nb_venergy_grad(V, F, z, V0, w, g1)
+    e4, g2 = K._np_venergy_grad(V, F, z, V0, w, S)
     assert e1 == pytest.approx(e2, rel=1e-12) and e3 == pytest.approx(e4, rel=1e-12)
     assert np.allclose(g1, g2, rtol=1e-10, atol=1e-12)
 
@@ -224,20 +223,19 @@ def test_fused_armijo_kernels_agree_with_numpy(mesh, rng):
 
     V, F = mesh
     z = rng.normal(size=(len(F), 3))
-    y = rng.normal(size=(len(F), 3))  # the fold term active on about half the faces
     V0 = V + 0.1 * rng.normal(size=V.shape)
     w = rng.random(len(V))
     w[::7] = 0.0  # vertices outside the fidelity region
     S = sp.csr_matrix((np.ones(3 * len(F)), (F.T.ravel(), np.arange(3 * len(F)))),
                       shape=(len(V), 3 * len(F)))
     g1, h1 = np.empty_like(V), np.empty(len(V))
-    e1 = FU._nb_venergy_grad_hdiag(V, F, z, y, V0, w, g1, h1)
-    e2, g2, h2 = FU._np_venergy_grad_hdiag(V, F, z, y, V0, w, S)
+    e1 = FU._nb_venergy_grad_hdiag(V, F, z, V0, w, g1, h1)
+    e2, g2, h2 = FU._np_venergy_grad_hdiag(V, F, z, V0, w, S)
     assert e1 == pytest.approx(e2, rel=1e-12)
     assert np.allclose(g1, g2, rtol=1e-10, atol=1e-12) and np.allclose(h1, h2, rtol=1e-12)
-    assert np.allclose(h1, K._nb_vhess_diag(V, F, z, y, w), rtol=1e-13)
+    assert np.allclose(h1, K._nb_vhess_diag(V, F, z, w), rtol=1e-13)
     g3 = np.empty_like(V)
-    assert e1 == pytest.approx(K._nb_venergy_grad(V, F, z, y, V0, w, g3), rel=1e-13)
+    assert e1 == pytest.approx(K._nb_venergy_grad(V, F, z, V0, w, g3), rel=1e-13)
     assert np.allclose(g1, g3, rtol=1e-12, atol=1e-13)
     hmin = float(np.median(h1))
     d1, d2 = np.empty_like(V), np.empty_like(V)
@@ -245,22 +243,22 @@ def test_fused_armijo_kernels_agree_with_numpy(mesh, rng):
     s2 = FU._np_descent_direction(g1, h1, hmin, d2)
     assert np.allclose(d1, d2, rtol=1e-15) and s1 == pytest.approx(s2, rel=1e-12) and s1 > 0
     o1, o2 = np.empty_like(V), np.empty_like(V)
-    t1 = FU._nb_venergy_trial(V, d1, 0.3, o1, F, z, y, V0, w)
-    t2 = FU._np_venergy_trial(V, d1, 0.3, o2, F, z, y, V0, w)
+    t1 = FU._nb_venergy_trial(V, d1, 0.3, o1, F, z, V0, w)
+    t2 = FU._np_venergy_trial(V, d1, 0.3, o2, F, z, V0, w)
     assert np.allclose(o1, V + 0.3 * d1, rtol=1e-15, atol=1e-15) and np.allclose(o1, o2)
     assert t1 == pytest.approx(t2, rel=1e-12)
-    assert t1 == pytest.approx(K._nb_venergy(V + 0.3 * d1, F, z, y, V0, w), rel=1e-14)
+    assert t1 == pytest.approx(K._nb_venergy(V + 0.3 * d1, F, z, V0, w), rel=1e-14)
     # trial point with the gradient: the values of the trial kernel + the gradient kernel there
     o3, g4 = np.empty_like(V), np.empty_like(V)
-    e5 = FU._nb_venergy_grad_trial(V, d1, 0.3, o3, F, z, y, V0, w, g4)
+    e5 = FU._nb_venergy_grad_trial(V, d1, 0.3, o3, F, z, V0, w, g4)
     g5 = np.empty_like(V)
-    e6 = K._nb_venergy_grad(o1, F, z, y, V0, w, g5)
+    e6 = K._nb_venergy_grad(o1, F, z, V0, w, g5)
     assert np.array_equal(o3, o1) and np.array_equal(g4, g5) and e5 == e6
-    e7, g7 = FU.venergy_grad_trial(V, d1, 0.3, np.empty_like(V), F, z, y, V0, w)
+    e7, g7 = FU.venergy_grad_trial(V, d1, 0.3, np.empty_like(V), F, z, V0, w)
     assert e7 == e5 and np.array_equal(g7, g4)
     o4 = np.empty_like(V)
     np.add(V, 0.3 * d1, out=o4)
-    e8, g8 = FU._np_venergy_grad(o4, F, z, y, V0, w, S)
+    e8, g8 = FU._np_venergy_grad(o4, F, z, V0, w, S)
     assert e8 == pytest.approx(e5, rel=1e-12) and np.allclose(g8, g4, rtol=1e-10, atol=1e-12)
 
 

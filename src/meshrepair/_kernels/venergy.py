@@ -8,46 +8,38 @@ import numpy as np
 from meshrepair._kernels._jit import FASTMATH, HAVE_NUMBA, njit
 
 
-def _np_fold(y, c):
-    """``min(0, ⟨y_m, c_m⟩)`` per face: the fold term of (26) is its square."""
-    return np.minimum(np.einsum("ij,ij->i", y, c), 0.0)
-
-
-def _np_venergy(V, F, z, y, V0, wfid):
+def _np_venergy(V, F, z, V0, wfid):
     p0 = V[F[:, 0]]
     c = np.cross(V[F[:, 1]] - p0, V[F[:, 2]] - p0)
     q = np.maximum(np.sqrt(np.einsum("ij,ij->i", c, c)), 1e-300)
     d = V - V0
-    s = _np_fold(y, c)
-    return float(np.sum(np.einsum("ij,ij->i", z, c / q[:, None]) + s * s)) + 0.5 * float(
+    return float(np.einsum("ij,ij->", z, c / q[:, None])) + 0.5 * float(
         np.einsum("i,ij,ij->", wfid, d, d))
 
 
-def _np_venergy_grad(V, F, z, y, V0, wfid, S):
+def _np_venergy_grad(V, F, z, V0, wfid, S):
     p0, p1, p2 = V[F[:, 0]], V[F[:, 1]], V[F[:, 2]]
     c = np.cross(p1 - p0, p2 - p0)
     q = np.maximum(np.sqrt(np.einsum("ij,ij->i", c, c)), 1e-300)
     n = c / q[:, None]
     zn = np.einsum("ij,ij->i", z, n)
-    s = _np_fold(y, c)
-    g = (z - zn[:, None] * n) / q[:, None] + (2.0 * s)[:, None] * y
+    g = (z - zn[:, None] * n) / q[:, None]
     contrib = np.concatenate([np.cross(g, p2 - p1), np.cross(g, p0 - p2), np.cross(g, p1 - p0)])
     grad = S @ contrib
     d = V - V0
     grad += wfid[:, None] * d
-    return float(np.sum(zn + s * s)) + 0.5 * float(np.einsum("i,ij,ij->", wfid, d, d)), grad
+    return float(zn.sum()) + 0.5 * float(np.einsum("i,ij,ij->", wfid, d, d)), grad
 
 
-def _np_vhess_diag(V, F, z, y, wfid):
+def _np_vhess_diag(V, F, z, wfid):
     p0, p1, p2 = V[F[:, 0]], V[F[:, 1]], V[F[:, 2]]
     c = np.cross(p1 - p0, p2 - p0)
     q2 = np.maximum(np.einsum("ij,ij->i", c, c), 1e-300)
-    zn = np.sqrt(np.einsum("ij,ij->i", z, z)) / q2 + np.where(
-        np.einsum("ij,ij->i", y, c) < 0.0, 2.0 * np.einsum("ij,ij->i", y, y), 0.0)
+    zn = np.sqrt(np.einsum("ij,ij->i", z, z))
     h = np.zeros(len(V))
     for k, (a, b) in enumerate(((p2, p1), (p0, p2), (p1, p0))):
         e2 = np.einsum("ij,ij->i", a - b, a - b)
-        h += np.bincount(F[:, k], zn * e2, len(V))
+        h += np.bincount(F[:, k], zn * e2 / q2, len(V))
     return h + wfid
 
 
@@ -67,16 +59,13 @@ if HAVE_NUMBA:
         return ax, ay, az, bx, by, bz, ay * bz - az * by, az * bx - ax * bz, ax * by - ay * bx
 
     @njit(cache=True, inline="always")
-    def _face_energy(V, z, y, m, i, j, k):  # pragma: no cover - compiled
-        """Terms ``z_m · n_m + min(0, y_m · c_m)²`` of (26) of face m = (i, j, k) of ``V``."""
+    def _face_energy(V, z, m, i, j, k):  # pragma: no cover - compiled
+        """Term ``z_m · n_m`` of (26) of face m = (i, j, k) of ``V``."""
         ax, ay, az, bx, by, bz, cx, cy, cz = _tri(V, i, j, k)
         q = np.sqrt(cx * cx + cy * cy + cz * cz)
         if q < 1e-300:
             q = 1e-300
-        s = y[m, 0] * cx + y[m, 1] * cy + y[m, 2] * cz
-        if s > 0.0:
-            s = 0.0
-        return (z[m, 0] * cx + z[m, 1] * cy + z[m, 2] * cz) / q + s * s
+        return (z[m, 0] * cx + z[m, 1] * cy + z[m, 2] * cz) / q
 
     @njit(cache=True, inline="always")
     def _fidelity_grad(V, V0, wfid, v, grad):  # pragma: no cover - compiled
@@ -92,12 +81,11 @@ if HAVE_NUMBA:
         return w * (dx * dx + dy * dy + dz * dz)
 
     @njit(cache=True, inline="always")
-    def _face_grad(V, i, j, k, zx, zy, zz, yx, yy, yz, grad):  # pragma: no cover - compiled
-        """Adds the gradient (28) of the terms ``z · n + min(0, y · c)²`` of the face (i, j, k)
-        into ``grad``; returns the terms, ``|c|²`` (``c = a x b``), the fold term's share of the
-        Jacobi scale (``2 |y|²`` on a face with ``y · c < 0``, else 0) and the edge vectors
-        ``u = p2 - p1``, ``a = p1 - p0``, ``b = p2 - p0`` (the Jacobi scale of :func:`vhess_diag`
-        reuses them). The caller loads ``i, j, k``, ``z`` and ``y``, before the ``grad`` stores."""
+    def _face_grad(V, i, j, k, zx, zy, zz, grad):  # pragma: no cover - compiled
+        """Adds the gradient (28) of the term ``z · n`` of the face (i, j, k) into ``grad``;
+        returns the term, ``|c|²`` (``c = a x b``) and the edge vectors ``u = p2 - p1``,
+        ``a = p1 - p0``, ``b = p2 - p0`` (the Jacobi scale of :func:`vhess_diag` reuses them).
+        The caller loads ``i, j, k`` and ``z``, before the ``grad`` stores."""
         p0x, p0y, p0z = V[i, 0], V[i, 1], V[i, 2]
         p1x, p1y, p1z = V[j, 0], V[j, 1], V[j, 2]
         p2x, p2y, p2z = V[k, 0], V[k, 1], V[k, 2]
@@ -116,15 +104,6 @@ if HAVE_NUMBA:
         gx = (zx - zn * nx) * iq
         gy = (zy - zn * ny) * iq
         gz = (zz - zn * nz) * iq
-        # the fold term: d min(0, y·c)² = 2 min(0, y·c) y · dc, the same cross products as (28)
-        s = yx * cx + yy * cy + yz * cz
-        hy = 0.0
-        if s < 0.0:
-            gx += 2.0 * s * yx
-            gy += 2.0 * s * yy
-            gz += 2.0 * s * yz
-            zn += s * s
-            hy = 2.0 * (yx * yx + yy * yy + yz * yz)
         # corner i: g x (p2 - p1)
         ux, uy, uz = p2x - p1x, p2y - p1y, p2z - p1z
         grad[i, 0] += gy * uz - gz * uy
@@ -139,17 +118,17 @@ if HAVE_NUMBA:
         grad[k, 0] += gy * az - gz * ay
         grad[k, 1] += gz * ax - gx * az
         grad[k, 2] += gx * ay - gy * ax
-        return zn, c2, hy, ux, uy, uz, ax, ay, az, bx, by, bz
+        return zn, c2, ux, uy, uz, ax, ay, az, bx, by, bz
 
     # The kernels below call the inlined helpers above; numba's on-disk cache does not notice a
     # change of an inlined helper defined in another file, so every caller stays in this file
     # (meshrepair.model._fused only wraps the fused ones).
 
     @njit(cache=True, fastmath=FASTMATH)
-    def _nb_venergy(V, F, z, y, V0, wfid):  # pragma: no cover - compiled
+    def _nb_venergy(V, F, z, V0, wfid):  # pragma: no cover - compiled
         e = 0.0
         for m in range(F.shape[0]):
-            e += _face_energy(V, z, y, m, F[m, 0], F[m, 1], F[m, 2])
+            e += _face_energy(V, z, m, F[m, 0], F[m, 1], F[m, 2])
         f = 0.0
         for v in range(V.shape[0]):
             w = wfid[v]
@@ -161,19 +140,18 @@ if HAVE_NUMBA:
         return e + 0.5 * f
 
     @njit(cache=True, fastmath=FASTMATH)
-    def _nb_venergy_grad(V, F, z, y, V0, wfid, grad):  # pragma: no cover - compiled
+    def _nb_venergy_grad(V, F, z, V0, wfid, grad):  # pragma: no cover - compiled
         f = 0.0
         for v in range(V.shape[0]):
             f += _fidelity_grad(V, V0, wfid, v, grad)
         e = 0.0
         for m in range(F.shape[0]):
             i, j, k = F[m, 0], F[m, 1], F[m, 2]
-            e += _face_grad(V, i, j, k, z[m, 0], z[m, 1], z[m, 2], y[m, 0], y[m, 1], y[m, 2],
-                            grad)[0]
+            e += _face_grad(V, i, j, k, z[m, 0], z[m, 1], z[m, 2], grad)[0]
         return e + 0.5 * f
 
     @njit(cache=True, fastmath=FASTMATH)
-    def _nb_venergy_grad_hdiag(V, F, z, y, V0, wfid, grad, h):  # pragma: no cover - compiled
+    def _nb_venergy_grad_hdiag(V, F, z, V0, wfid, grad, h):  # pragma: no cover - compiled
         # meshrepair.model._fused.venergy_grad_hdiag: _nb_venergy_grad and _nb_vhess_diag in one pass  # noqa: E501
         f = 0.0
         for v in range(V.shape[0]):
@@ -183,19 +161,18 @@ if HAVE_NUMBA:
         for m in range(F.shape[0]):
             i, j, k = F[m, 0], F[m, 1], F[m, 2]
             zx, zy, zz = z[m, 0], z[m, 1], z[m, 2]
-            zn, c2, hy, ux, uy, uz, ax, ay, az, bx, by, bz = _face_grad(
-                V, i, j, k, zx, zy, zz, y[m, 0], y[m, 1], y[m, 2], grad)
+            zn, c2, ux, uy, uz, ax, ay, az, bx, by, bz = _face_grad(V, i, j, k, zx, zy, zz, grad)
             e += zn
             # the Jacobi scale of vhess_diag (same expressions)
             q2 = max(c2, 1e-300)
-            s = np.sqrt(zx ** 2 + zy ** 2 + zz ** 2) / q2 + hy
+            s = np.sqrt(zx ** 2 + zy ** 2 + zz ** 2) / q2
             h[i] += s * (ux * ux + uy * uy + uz * uz)
             h[j] += s * (bx * bx + by * by + bz * bz)
             h[k] += s * (ax * ax + ay * ay + az * az)
         return e + 0.5 * f
 
     @njit(cache=True, fastmath=FASTMATH)
-    def _nb_venergy_trial(V, d, step, out, F, z, y, V0, wfid):  # pragma: no cover - compiled
+    def _nb_venergy_trial(V, d, step, out, F, z, V0, wfid):  # pragma: no cover - compiled
         # meshrepair.model._fused.venergy_trial: out = V + step d, then _nb_venergy(out, ...)
         f = 0.0
         for v in range(V.shape[0]):
@@ -213,11 +190,11 @@ if HAVE_NUMBA:
                 f += w * (dx * dx + dy * dy + dz * dz)
         e = 0.0
         for m in range(F.shape[0]):
-            e += _face_energy(out, z, y, m, F[m, 0], F[m, 1], F[m, 2])
+            e += _face_energy(out, z, m, F[m, 0], F[m, 1], F[m, 2])
         return e + 0.5 * f
 
     @njit(cache=True, fastmath=FASTMATH)
-    def _nb_venergy_grad_trial(V, d, step, out, F, z, y, V0, wfid, grad):  # pragma: no cover
+    def _nb_venergy_grad_trial(V, d, step, out, F, z, V0, wfid, grad):  # pragma: no cover
         # meshrepair.model._fused.venergy_grad_trial: out = V + step d (as _nb_venergy_trial), then
         # _nb_venergy_grad(out, ...) into grad: the same values as the two calls
         f = 0.0
@@ -229,20 +206,17 @@ if HAVE_NUMBA:
         e = 0.0
         for m in range(F.shape[0]):
             i, j, k = F[m, 0], F[m, 1], F[m, 2]
-            e += _face_grad(out, i, j, k, z[m, 0], z[m, 1], z[m, 2], y[m, 0], y[m, 1], y[m, 2],
-                            grad)[0]
+            e += _face_grad(out, i, j, k, z[m, 0], z[m, 1], z[m, 2], grad)[0]
         return e + 0.5 * f
 
     @njit(cache=True, fastmath=FASTMATH)
-    def _nb_vhess_diag(V, F, z, y, wfid):  # pragma: no cover - compiled
+    def _nb_vhess_diag(V, F, z, wfid):  # pragma: no cover - compiled
         h = wfid.copy()
         for m in range(F.shape[0]):
             i, j, k = F[m, 0], F[m, 1], F[m, 2]
             ax, ay, az, bx, by, bz, cx, cy, cz = _tri(V, i, j, k)
             q2 = max(cx * cx + cy * cy + cz * cz, 1e-300)
             zn = np.sqrt(z[m, 0] ** 2 + z[m, 1] ** 2 + z[m, 2] ** 2) / q2
-            if y[m, 0] * cx + y[m, 1] * cy + y[m, 2] * cz < 0.0:
-                zn += 2.0 * (y[m, 0] ** 2 + y[m, 1] ** 2 + y[m, 2] ** 2)
             dx, dy, dz = V[k, 0] - V[j, 0], V[k, 1] - V[j, 1], V[k, 2] - V[j, 2]
             h[i] += zn * (dx * dx + dy * dy + dz * dz)
             h[j] += zn * (bx * bx + by * by + bz * bz)
@@ -250,31 +224,29 @@ if HAVE_NUMBA:
         return h
 
 
-def vhess_diag(V, F, z, y, wfid):
-    """A diagonal curvature scale of (26) per vertex:
-    ``λ_i + Σ_m (|z_m| / (2 s_m)² + 2 |y_m|² [y_m · c_m < 0]) |e_opp|²``.
+def vhess_diag(V, F, z, wfid):
+    """A diagonal curvature scale of (26) per vertex: ``λ_i + Σ_m |z_m| |e_opp|² / (2 s_m)²``.
 
     The normal of face m turns by about ``|e_opp| / (2 s_m)`` per unit move of a corner, so sliver
     faces make their corners stiff; dividing the gradient by this scale lets the rest of the mesh
-    keep a normal step (Jacobi-preconditioned descent). On a folded face the fold term's
-    curvature along ``y × e_opp`` adds ``2 |y|² |e_opp|²``.
+    keep a normal step (Jacobi-preconditioned descent).
     """
     if HAVE_NUMBA:
-        return _nb_vhess_diag(V, F, z, y, wfid)
-    return _np_vhess_diag(V, F, z, y, wfid)
+        return _nb_vhess_diag(V, F, z, wfid)
+    return _np_vhess_diag(V, F, z, wfid)
 
 
-def venergy(V, F, z, y, V0, wfid):
+def venergy(V, F, z, V0, wfid):
     """Energy (26) up to a constant (see :class:`meshrepair.model.inner.VSubproblem`)."""
     if HAVE_NUMBA:
-        return float(_nb_venergy(V, F, z, y, V0, wfid))
-    return _np_venergy(V, F, z, y, V0, wfid)
+        return float(_nb_venergy(V, F, z, V0, wfid))
+    return _np_venergy(V, F, z, V0, wfid)
 
 
-def venergy_grad(V, F, z, y, V0, wfid, S=None):
+def venergy_grad(V, F, z, V0, wfid, S=None):
     """Energy (26) and its gradient (28); ``S`` is the corner scatter matrix (numpy path)."""
     if HAVE_NUMBA:
         grad = np.empty_like(V)
-        e = _nb_venergy_grad(V, F, z, y, V0, wfid, grad)
+        e = _nb_venergy_grad(V, F, z, V0, wfid, grad)
         return float(e), grad
-    return _np_venergy_grad(V, F, z, y, V0, wfid, S)
+    return _np_venergy_grad(V, F, z, V0, wfid, S)

@@ -132,9 +132,9 @@ def rel_change(A, B):
     return float(f(A, B))
 
 
-def _np_venergy_grad_hdiag(V, F, z, y, V0, wfid, S):
-    e, g = _np_venergy_grad(V, F, z, y, V0, wfid, S)
-    return e, g, _np_vhess_diag(V, F, z, y, wfid)
+def _np_venergy_grad_hdiag(V, F, z, V0, wfid, S):
+    e, g = _np_venergy_grad(V, F, z, V0, wfid, S)
+    return e, g, _np_vhess_diag(V, F, z, wfid)
 
 
 def _np_descent_direction(g, h, h_min, d):
@@ -142,32 +142,32 @@ def _np_descent_direction(g, h, h_min, d):
     return -float(np.einsum("ij,ij->", g, d))
 
 
-def _np_venergy_trial(V, d, step, out, F, z, y, V0, wfid):
+def _np_venergy_trial(V, d, step, out, F, z, V0, wfid):
     np.add(V, step * d, out=out)
-    return _np_venergy(out, F, z, y, V0, wfid)
+    return _np_venergy(out, F, z, V0, wfid)
 
 
-def venergy_grad_trial(V, d, step, out, F, z, y, V0, wfid, S=None):
+def venergy_grad_trial(V, d, step, out, F, z, V0, wfid, S=None):
     """Write ``V + step d`` into ``out`` and return the energy (26) and gradient (28) there
     (one vertex pass and one face pass; the values of ``venergy_trial`` followed by
     ``_kernels.venergy_grad(out, ...)``)."""
     if HAVE_NUMBA:
         grad = np.empty_like(V)
-        e = _nb_venergy_grad_trial(V, d, float(step), out, F, z, y, V0, wfid, grad)
+        e = _nb_venergy_grad_trial(V, d, float(step), out, F, z, V0, wfid, grad)
         return float(e), grad
     np.add(V, step * d, out=out)
-    return _np_venergy_grad(out, F, z, y, V0, wfid, S)
+    return _np_venergy_grad(out, F, z, V0, wfid, S)
 
 
-def venergy_grad_hdiag(V, F, z, y, V0, wfid, S=None):
+def venergy_grad_hdiag(V, F, z, V0, wfid, S=None):
     """Energy (26), gradient (28) ``(nV, 3)`` and the Jacobi scale ``(nV,)`` of
     ``_kernels.vhess_diag``, in one face pass; ``S`` is the corner scatter matrix (numpy path)."""
     if HAVE_NUMBA:
         grad = np.empty_like(V)
         h = np.empty(len(V))
-        e = _nb_venergy_grad_hdiag(V, F, z, y, V0, wfid, grad, h)
+        e = _nb_venergy_grad_hdiag(V, F, z, V0, wfid, grad, h)
         return float(e), grad, h
-    return _np_venergy_grad_hdiag(V, F, z, y, V0, wfid, S)
+    return _np_venergy_grad_hdiag(V, F, z, V0, wfid, S)
 
 
 def descent_direction(g, h, h_min, d):
@@ -176,7 +176,7 @@ def descent_direction(g, h, h_min, d):
     return float(f(g, h, float(h_min), d))
 
 
-def venergy_trial(V, d, step, out, F, z, y, V0, wfid):
+def venergy_trial(V, d, step, out, F, z, V0, wfid):
     """Write ``V + step d`` into ``out`` and return the energy (26) there."""
     f = _nb_venergy_trial if HAVE_NUMBA else _np_venergy_trial
-    return float(f(V, d, float(step), out, F, z, y, V0, wfid))
+    return float(f(V, d, float(step), out, F, z, V0, wfid))

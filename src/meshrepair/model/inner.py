@@ -2,23 +2,10 @@
 
 .. math::
     \\mathcal J_V(V) = \\frac{\\lambda}{2}\\sum_i (M_V)_i \\|V_i - V^0_i\\|^2
-        + \\sum_m \\langle \\rho_{2m} - \\beta_2 N_m, \\mathcal N_m(V)\\rangle
-        + \\sum_m \\min(0, \\langle y_m, c_m(V)\\rangle)^2 \\; (+\\text{const})
+        + \\sum_m \\langle \\rho_{2m} - \\beta_2 N_m, \\mathcal N_m(V)\\rangle \\; (+\\text{const})
 
 (the ``β2/2 ||N_m - 𝒩_m(V)||²`` term equals ``β2 - β2 <N_m, 𝒩_m(V)>`` for unit vectors). Its
-gradient is (28) plus the fold term's.
-
-The fold term: ``c_m(V)`` is face m's unnormalised normal (twice its area along its unit normal)
-and ``y_m = sqrt(μ) N_m``. On a face folded against its target normal N_m, ``⟨N_m, 𝒩_m⟩ = -1``
-is a maximum of the normal term, so its gradient vanishes there and the direction in which the
-face leaves is decided by rounding. ``min(0, ⟨y_m, c_m⟩)²`` is zero on every face whose signed
-area along N_m is non-negative (so a solution without folds is unchanged) and on a folded face
-has the gradient ``2 ⟨y_m, c_m⟩ y_m × e`` at the corner opposite edge e, which does not vanish:
-it raises the face's signed area towards zero within its plane, in a direction fixed by the
-geometry. ``μ`` is in units of β2 per squared mean edge length (the solver works in mean edge
-lengths).
-
-All inner solvers share :class:`VSubproblem`'s energy-and-gradient kernel and are
+gradient is (28). All inner solvers share :class:`VSubproblem`'s energy-and-gradient kernel and are
 warm-started from the previous ADMM iterate.
 """
 
@@ -65,32 +52,25 @@ class VSubproblem:
         self.V0 = np.zeros((self.nV, 3))
         self.wfid = np.zeros(self.nV)
         self.z = np.zeros((nF, 3))
-        self.y = np.zeros((nF, 3))
         self.n_energy = 0
         self.n_grad = 0
 
-    def set(self, V0: np.ndarray, fidelity: np.ndarray, z: np.ndarray,
-            y: np.ndarray | None = None) -> None:
-        """Set ``V0``, the per-vertex fidelity weights ``λ (M_V)_i²``, ``z = ρ2 - β2 N`` and the
-        fold term's ``y = sqrt(μ) N`` (None: zero, no fold term)."""
+    def set(self, V0: np.ndarray, fidelity: np.ndarray, z: np.ndarray) -> None:
+        """Set ``V0``, the per-vertex fidelity weights ``λ (M_V)_i²`` and ``z = ρ2 - β2 N``."""
         self.V0 = V0
         self.wfid = fidelity
         self.z = z
-        if y is not None:
-            self.y = y
-        elif self.y.shape != z.shape or self.y.any():
-            self.y = np.zeros_like(z)
 
     def energy(self, V: np.ndarray) -> float:
         """``J_V(V)`` up to a constant."""
         self.n_energy += 1
-        return _k.venergy(V, self.F, self.z, self.y, self.V0, self.wfid)
+        return _k.venergy(V, self.F, self.z, self.V0, self.wfid)
 
     def energy_grad(self, V: np.ndarray) -> tuple[float, np.ndarray]:
         """``(J_V(V), ∇J_V(V))`` with the gradient (28), shape ``(nV, 3)``."""
         self.n_energy += 1
         self.n_grad += 1
-        e, grad = _k.venergy_grad(V, self.F, self.z, self.y, self.V0, self.wfid, self.S)
+        e, grad = _k.venergy_grad(V, self.F, self.z, self.V0, self.wfid, self.S)
         if self.free is not None:
             grad[~self.free] = 0.0
         return e, grad
@@ -101,8 +81,7 @@ class VSubproblem:
         is ``max(h, h_min)`` (left unclamped here so one fused pass can apply it)."""
         self.n_energy += 1
         self.n_grad += 1
-        e, grad, h = _fused.venergy_grad_hdiag(V, self.F, self.z, self.y, self.V0, self.wfid,
-                                               self.S)
+        e, grad, h = _fused.venergy_grad_hdiag(V, self.F, self.z, self.V0, self.wfid, self.S)
         if self.free is not None:
             grad[~self.free] = 0.0
         return e, grad, h, max(STIFF_RATIO * median(h), 1e-300)
@@ -110,7 +89,7 @@ class VSubproblem:
     def energy_at(self, V: np.ndarray, d: np.ndarray, step: float, out: np.ndarray) -> float:
         """Write ``V + step d`` into ``out`` and return ``J_V`` there (one fused pass)."""
         self.n_energy += 1
-        return _fused.venergy_trial(V, d, step, out, self.F, self.z, self.y, self.V0, self.wfid)
+        return _fused.venergy_trial(V, d, step, out, self.F, self.z, self.V0, self.wfid)
 
     def energy_grad_at(self, V: np.ndarray, d: np.ndarray, step: float, out: np.ndarray
                        ) -> tuple[float, np.ndarray]:
@@ -118,15 +97,15 @@ class VSubproblem:
         the values of :meth:`energy_grad` at ``out``)."""
         self.n_energy += 1
         self.n_grad += 1
-        e, grad = _fused.venergy_grad_trial(V, d, step, out, self.F, self.z, self.y, self.V0,
-                                            self.wfid, self.S)
+        e, grad = _fused.venergy_grad_trial(V, d, step, out, self.F, self.z, self.V0, self.wfid,
+                                            self.S)
         if self.free is not None:
             grad[~self.free] = 0.0
         return e, grad
 
     def diag_scale(self, V: np.ndarray) -> np.ndarray:
         """Per-vertex diagonal scale of the Hessian of (26) at ``V`` (see ``vhess_diag``)."""
-        h = _k.vhess_diag(V, self.F, self.z, self.y, self.wfid)
+        h = _k.vhess_diag(V, self.F, self.z, self.wfid)
         # only vertices stiffer than the typical one are slowed down: on a regular mesh this is
         # plain gradient descent, and slivers no longer dictate the step of everyone else
         return np.maximum(h, max(STIFF_RATIO * median(h), 1e-300))
@@ -174,29 +153,15 @@ def solve_armijo(prob: VSubproblem, V: np.ndarray, iters: int, state: InnerState
     d = np.empty_like(V)
     bufs = [np.empty_like(V), np.empty_like(V)]
     c1, shrink = 1e-4, 0.5
-    import os
-    cap = float(os.environ.get("MR_CAP", "0"))
-    if cap > 0:
-        hh = np.maximum(h, h_min)
-        smax = cap * hh / np.maximum(h, 1e-300)
     for it in range(iters):
         gg = _fused.descent_direction(g, h, h_min, d)
         if gg == 0.0:
             break
-        if cap > 0:
-            gv = np.einsum("ij,ij->i", g, d)  # <g_v, d_v> <= 0
-            d0 = d.copy()
         out = bufs[it % 2]
         need_grad = it + 1 < iters
         rejected = False
         g_out = None
         while step > 1e-14:  # (31) along d, slope -gg
-            if cap > 0:
-                f = np.minimum(step, smax)
-                np.multiply(d0, (f / step)[:, None], out=d)
-                lin = float(f @ gv)
-            else:
-                lin = step * -gg
             if need_grad and rejected:
                 # after a rejected trial the next one is usually accepted: its gradient, needed
                 # next, comes from the same pass (and so does its energy, the value the next
@@ -204,7 +169,7 @@ def solve_armijo(prob: VSubproblem, V: np.ndarray, iters: int, state: InnerState
                 En, g_out = prob.energy_grad_at(V, d, step, out)
             else:
                 En = prob.energy_at(V, d, step, out)
-            if En <= E + c1 * lin:
+            if En <= E + c1 * step * -gg:
                 break
             step *= shrink
             rejected = True

@@ -295,8 +295,7 @@ class ADMMSolver:
                         Xd = X0 + S
                     else:
                         Xd = X0
-                    self.vsub.set(Xd, fid, z, None if o.fold_weight <= 0 else
-                                  self._fold_y(V, N, o.fold_weight * beta2))
+                    self.vsub.set(Xd, fid, z)
                     Vn = run_inner(o.inner_solver, self.vsub, V, o.inner_iters, state)
                     if self.anchor is not None:
                         Vn = tangential_anchor_on(Vn, X0, F, self.anchor,
@@ -369,17 +368,6 @@ class ADMMSolver:
             scale=scale,
             state=s if keep_state else None,
         )
-
-    def _fold_y(self, V, N, mu):
-        import os
-        mode = os.environ.get("MR_FOLD_MODE", "abs")
-        if mode == "abs":
-            return np.sqrt(mu) * N
-        F = self.F
-        c = np.cross(V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]])
-        q = np.sqrt(np.einsum("ij,ij->i", c, c))
-        floor = float(os.environ.get("MR_FOLD_FLOOR", "0.01"))
-        return (np.sqrt(mu) / np.maximum(q, floor))[:, None] * N
 
     @staticmethod
     def _not_finite(inner_solver: str, k: int) -> None:

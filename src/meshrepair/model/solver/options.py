@@ -78,9 +78,6 @@ class SolverOptions:
     min_feature_edges : an adaptive mask keeps only sharp edges in connected chains of at least
         this many sharp edges (1 keeps all). Real creases are long lines; what residual noise
         marks sharp is scattered in short pieces.
-    fold_weight : μ / β2 of the fold term of the V-subproblem (26)
-        (:mod:`meshrepair.model.inner`): ``μ min(0, ⟨N_m, c_m(V)⟩)²`` per face, ``c_m`` its
-        unnormalised normal in mean edge lengths; 0 leaves (26) as in the paper.
     """
 
     lam: float = 0.1
@@ -98,7 +95,6 @@ class SolverOptions:
     min_feature_edges: int = 1
     precondition: bool = True
     huber_delta: float = 0.0
-    fold_weight: float = float(__import__("os").environ.get("MR_FOLD", "0"))
 
     def validate(self) -> None:
         """Check every option (finite, in range, known choice); MeshRepairError naming it."""
@@ -112,7 +108,6 @@ class SolverOptions:
         if not (isinstance(self.th, (int, float, np.number)) and 0 < self.th < 180):
             raise MeshRepairError(f"th must be an angle in (0, 180) degrees, got {self.th}")
         check_number("huber_delta", self.huber_delta, low=0)
-        check_number("fold_weight", self.fold_weight, low=0)
         check_number("willmore_weight", self.willmore_weight, low=0)
         check_number("tol", self.tol, low=0, low_open=True)
         check_int("inner_iters", self.inner_iters, low=1)
