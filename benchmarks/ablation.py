@@ -191,12 +191,16 @@ INGREDIENTS = [
                "white read", READ, switch="KEEP_WHITE"),
     Ingredient("layout keep", "layoutkeep.LAYOUT_KEEP: low-passes do not resample at the "
                "input's layout", READ, switch="LAYOUT_KEEP"),
+    Ingredient("c2f layout keep", "layoutkeep.PRESMOOTH_KEEP: the coarse-to-fine low-pass does "
+               "not resample at the input's layout", READ, switch="PRESMOOTH_KEEP"),
     Ingredient("unfold data", "folds.UNFOLD_DATA_IMPULSIVE: the input, not the unfolded mesh, "
                "is the data of impulsive noise", READ, switch="UNFOLD_DATA_IMPULSIVE"),
     Ingredient("probe stop", "rules.PROBE_EARLY_STOP: the probe runs to its cap", READ,
                switch="PROBE_EARLY_STOP"),
     Ingredient("scale-free stop", "scalefree.SCALE_FREE_STOP: the probe's tolerance not in "
                "edge units", READ, switch="SCALE_FREE_STOP"),
+    Ingredient("gated stop", "scalefree.GATED_STOP: the scale-free stop also where the probe "
+               "at the relative stop reads no crease", READ, switch="GATED_STOP"),
     Ingredient("scale-free CAD", "scalefree.SCALE_FREE_CAD: the CAD-part test not corrected "
                "for resolution", READ, switch="SCALE_FREE_CAD"),
 ]
