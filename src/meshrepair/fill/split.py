@@ -146,6 +146,7 @@ def retry_split(V: np.ndarray, F: np.ndarray, holes: Sequence[Hole], skip: dict[
     notes2 = dict(notes)
     for i, ps in parts.items():
         notes2.update({p: notes[i] for p in ps if i in notes})
+    opts = dict(opts, progress=None)  # the progress bar ran over the holes once
     res2 = _fill_core(V_aug, F, holes2, skip, **opts, known_holes=inherit(known),
                       kept_holes=inherit(kept), notes=notes2)
     by1 = {r.index: r for r in res.holes}
