@@ -105,3 +105,19 @@ def test_retry_split_fills_the_parts_when_the_whole_patch_intersects():
     assert np.array_equal(out.new_vertices, np.arange(len(V), len(out.V)))
     assert (out.M_V[len(V):] == 0).all() and (out.M_V[:len(V)] == 1).all()
     assert np.abs(out.V[len(V):, 2]).max() < 1e-6  # a flat hole stays flat
+
+
+def test_retry_split_says_the_loop_note_once():
+    V, F = _dumbbell()
+    res = fill_holes(V, F)
+    holes = _find_holes(V, F)
+    i = [h.index for h in holes if h.index != 0][0]
+    [r for r in res.holes if r.index == i][0].n_intersections = 10**6
+    opts = dict(denoise=False, initial="bilaplacian", refine=True, edge_length=None, lam=None,
+                th=30.0, a=10.0, max_iter=150, tol=1e-5, rings=3, relax=0.0,
+                inner_solver="armijo", inner_iters=3, check=True, callback=None, progress=None,
+                creases=True, curvature=True, triharmonic=True, fitted=False)
+    out = retry_split(V, F, holes, {0: "open border"}, res, opts, {i}, set(),
+                      {i: "uncertain: check it"})
+    rep = [r for r in out.holes if r.index == i][0]
+    assert rep.note.count("uncertain: check it") == 1

@@ -143,12 +143,9 @@ def retry_split(V: np.ndarray, F: np.ndarray, holes: Sequence[Hole], skip: dict[
     def inherit(s: set[int]) -> set[int]:
         return set(s) | {p for i, ps in parts.items() if i in s for p in ps}
 
-    notes2 = dict(notes)
-    for i, ps in parts.items():
-        notes2.update({p: notes[i] for p in ps if i in notes})
     opts = dict(opts, progress=None)  # the progress bar ran over the holes once
     res2 = _fill_core(V_aug, F, holes2, skip, **opts, known_holes=inherit(known),
-                      kept_holes=inherit(kept), notes=notes2)
+                      kept_holes=inherit(kept), notes=notes)
     by1 = {r.index: r for r in res.holes}
     by2 = {r.index: r for r in res2.holes}
     before = sum(by1[i].n_intersections for i in parts)
@@ -174,9 +171,11 @@ def retry_split(V: np.ndarray, F: np.ndarray, holes: Sequence[Hole], skip: dict[
             n_creases=sum(p.n_creases for p in ps),
             sharp_edges=np.concatenate([p.sharp_edges for p in ps]).reshape(-1, 2),
             quality=dict(main.quality, check=any(p.quality.get("check") for p in ps)))
+        if r.index in notes:  # the loop's own note (its border decision), once
+            rep.add_note(notes[r.index])
         for p in ps:
-            if p.note and p.note not in rep.note:
-                rep.add_note(p.note)
+            if p.note:
+                rep.add_note(f"{p.n_boundary}-edge part: {p.note}")
         reports.append(rep)
     res2.holes = reports
     res2.M_V = res2.M_V.copy()
