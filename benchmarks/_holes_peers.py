@@ -49,7 +49,8 @@ def _meshrepair(V, F, hc):
 
     r = fill_holes(V, F, **MESHREPAIR_OPTIONS)
     LAST_NOTES[:] = [f"{h.index} ({h.n_boundary} edges) {h.status}: {h.reason}; {h.note}"
-                     for h in r.holes if h.status != "filled" or h.note]
+                     for h in r.holes if h.status != "filled" or h.note
+                     or h.reason.startswith("split")]
     return r.V, r.F
 
 

@@ -161,6 +161,11 @@ def fill_holes(
                     f"check it, or keep it open with exclude=[{i}] (CLI --exclude {i})")
     res = _fill_core(V, F, found, skip, **opts, known_holes=known, kept_holes=uncertain,
                      notes=notes)
+    if check and not denoise:
+        # a loop whose patch intersects the surface may be two loops touching at a narrow place
+        from meshrepair.fill.split import retry_split
+
+        res = retry_split(V, F, found, skip, res, opts, known, uncertain, notes)
     res.params.update(enclosure={int(i): round(w, 4) for i, w in enclosure.items()})
     res.params.update(max_hole_size=max_hole_size, keep_border=keep_border,
                       exclude=list(exclude), holes=None if holes is None else list(holes))
