@@ -44,6 +44,30 @@ def test_round_loop_has_no_narrow_place():
     assert r[0] > NECK_RATIO
 
 
+def test_narrowest_place_in_row_blocks_equals_the_whole_table():
+    """The blockwise search (rows of ROW_BLOCK at a time) finds the pair of the whole n × n
+    table of chord / shorter arc, on a pinched loop longer than one block."""
+    import meshrepair.fill.split as sp
+
+    rng = np.random.default_rng(3)
+    n = sp.ROW_BLOCK * 2 + 37
+    t = np.linspace(0.0, 2.0 * np.pi, n, endpoint=False)
+    P = np.c_[np.cos(t), np.sin(t) * (0.05 + np.abs(np.cos(t))), np.zeros(n)]
+    P += 1e-3 * rng.standard_normal(P.shape)
+    seg = np.linalg.norm(P - np.roll(P, -1, axis=0), axis=1)
+    L, cum = seg.sum(), np.r_[0.0, np.cumsum(seg)][:n]
+    A = np.abs(cum[:, None] - cum[None, :])
+    A = np.minimum(A, L - A)
+    D = np.linalg.norm(P[:, None, :] - P[None, :, :], axis=2)
+    R = np.where(A >= sp.MIN_ARC * L / n, D / np.maximum(A, 1e-300), np.inf)
+    i, j = np.unravel_index(int(np.argmin(R)), R.shape)
+    got = narrowest_place(P)
+    assert got is not None
+    assert got[0] == float(R[i, j])
+    assert (got[1], got[2]) == (min(i, j), max(i, j))
+    assert got[0] < NECK_RATIO  # the waist at t = ±π/2 is narrow
+
+
 def test_dumbbell_loop_splits_into_two_consistent_loops():
     V, F = _dumbbell()
     holes = _find_holes(V, F)

@@ -39,6 +39,10 @@ MIN_ARC = 4.0
 """Both arcs of a split are at least this many of the loop's mean edge lengths (a notch of a few
 edges is not a second loop)."""
 
+ROW_BLOCK = 512
+"""Rows of the pairwise chord / arc table computed at a time (a loop of thousands of vertices
+then needs a few tens of MB, not its whole n² table)."""
+
 MAX_DEPTH = 4
 """Splits of splits, at most."""
 
@@ -53,15 +57,20 @@ def narrowest_place(P: np.ndarray) -> tuple[float, int, int] | None:
     if n < 6 or L <= 0:
         return None
     cum = np.r_[0.0, np.cumsum(seg)][:n]
-    A = np.abs(cum[:, None] - cum[None, :])
-    A = np.minimum(A, L - A)
-    D = np.linalg.norm(P[:, None, :] - P[None, :, :], axis=2)
-    ok = A >= MIN_ARC * L / n
-    if not ok.any():
+    best = (np.inf, 0, 0)
+    for r0 in range(0, n, ROW_BLOCK):  # rows in blocks: memory O(ROW_BLOCK · n), not O(n²)
+        rows = slice(r0, min(r0 + ROW_BLOCK, n))
+        A = np.abs(cum[rows, None] - cum[None, :])
+        A = np.minimum(A, L - A)
+        D = np.linalg.norm(P[rows, None, :] - P[None, :, :], axis=2)
+        R = np.where(A >= MIN_ARC * L / n, D / np.maximum(A, 1e-300), np.inf)
+        k = int(np.argmin(R))
+        i, j = divmod(k, n)
+        if R.flat[k] < best[0]:
+            best = (float(R.flat[k]), r0 + i, j)
+    if not np.isfinite(best[0]):
         return None
-    R = np.where(ok, D / np.maximum(A, 1e-300), np.inf)
-    i, j = np.unravel_index(int(np.argmin(R)), R.shape)
-    return float(R[i, j]), int(min(i, j)), int(max(i, j))
+    return best[0], min(best[1], best[2]), max(best[1], best[2])
 
 
 def split_loop(V: np.ndarray, loop: np.ndarray, extra: list[np.ndarray], n_base: int,
