@@ -145,3 +145,31 @@ def test_retry_split_says_the_loop_note_once():
                       {i: "uncertain: check it"})
     rep = [r for r in out.holes if r.index == i][0]
     assert rep.note.count("uncertain: check it") == 1
+
+
+def test_retry_split_keeps_the_whole_fill_when_the_retry_fails(monkeypatch):
+    """The split's second fill is optional: when it raises, the first fill is returned as it
+    was (nothing of the user's fill is lost)."""
+    import meshrepair.fill.core as core
+    from meshrepair.errors import MeshRepairError
+
+    V, F = _dumbbell()
+    res = fill_holes(V, F)
+    holes = _find_holes(V, F)
+    i = [h.index for h in holes if h.index != 0][0]
+    rep = [r for r in res.holes if r.index == i][0]
+    rep.n_intersections = 10**6
+    V_before, F_before = res.V.copy(), res.F.copy()
+
+    def fail(*args, **kwargs):
+        raise MeshRepairError("refused")
+
+    monkeypatch.setattr(core, "_fill_core", fail)
+    opts = dict(denoise=False, initial="bilaplacian", refine=True, edge_length=None, lam=None,
+                th=30.0, a=10.0, max_iter=150, tol=1e-5, rings=3, relax=0.0,
+                inner_solver="armijo", inner_iters=3, check=True, callback=None, progress=None,
+                creases=True, curvature=True, triharmonic=True, fitted=False)
+    out = retry_split(V, F, holes, {0: "open border"}, res, opts, set(), set(), {})
+    assert out is res
+    assert np.array_equal(out.V, V_before) and np.array_equal(out.F, F_before)
+    assert not out.params.get("split")

@@ -25,11 +25,15 @@ continues the surround across the gap.
 
 from __future__ import annotations
 
+import logging
 from collections.abc import Sequence
 
 import numpy as np
 
+from meshrepair.errors import MeshRepairError
 from meshrepair.holes.detect import Hole
+
+log = logging.getLogger("meshrepair.fill")
 
 NECK_RATIO = 0.15
 """A loop is split where its chord / shorter-arc ratio is at most this (see the module
@@ -153,8 +157,13 @@ def retry_split(V: np.ndarray, F: np.ndarray, holes: Sequence[Hole], skip: dict[
         return set(s) | {p for i, ps in parts.items() if i in s for p in ps}
 
     opts = dict(opts, progress=None)  # the progress bar ran over the holes once
-    res2 = _fill_core(V_aug, F, holes2, skip, **opts, known_holes=inherit(known),
-                      kept_holes=inherit(kept), notes=notes)
+    try:
+        res2 = _fill_core(V_aug, F, holes2, skip, **opts, known_holes=inherit(known),
+                          kept_holes=inherit(kept), notes=notes)
+    except MeshRepairError as exc:  # the retry is optional: the whole loops' fill stands
+        log.warning("the fill of the split loops failed (%s); the whole loops' patches are "
+                    "kept", exc)
+        return res
     by1 = {r.index: r for r in res.holes}
     by2 = {r.index: r for r in res2.holes}
     before = sum(by1[i].n_intersections for i in parts)
