@@ -78,6 +78,7 @@ from meshrepair.holes.crease_ends import (  # noqa: F401  (re-exported)
 
 log = logging.getLogger(__name__)
 
+
 def _pair_curve(p0: np.ndarray, d0: np.ndarray, p1: np.ndarray, d1: np.ndarray) -> np.ndarray:
     """Hermite data of a pair's route from ``p0`` (direction ``d0`` into the hole) to ``p1``
     (direction ``d1`` into the hole): tangent length of the cubic closest to a circular arc
@@ -179,8 +180,6 @@ def route_creases(V: np.ndarray, loop: np.ndarray, ends: list[CreaseEnd]) -> Cre
         used.update((a, b))
         ea, eb = ends[a], ends[b]
         p0, p1 = P[ea.pos], P[eb.pos]
-        L = float(np.linalg.norm(p1 - p0))
-        # tangent length of the cubic closest to a circular arc turning by theta
         segs.append((ea.pos, eb.pos))
         curves.append(_pair_curve(p0, ea.direction, p1, eb.direction))
         kinds.append("pair")
