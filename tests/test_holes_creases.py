@@ -212,3 +212,32 @@ def test_l_prism_concave_crease_and_mixed_corner():
         ang, ids, _ = _crease_dihedrals(res)
         assert np.abs(ang[ids] - 90.0).max() < 5.0
         assert _normal_deviation_box(res).max() < 1.0
+
+
+def test_pair_tilt_past_the_bound():
+    """Ends within ``PAIR_MAX_TILT`` of the hole's plane pair; one end tilted past it pairs when
+    the mean direction is within it and the route stays inside the loop seen through the plane;
+    two ends tilted the same way (a fold diving into a flat cut) do not pair."""
+    from meshrepair.holes.creases import PAIR_MAX_TILT, CreaseEnd
+
+    t = np.linspace(0, 2 * np.pi, 24, endpoint=False)
+    V = np.c_[-np.cos(t), 0.05 * np.sin(t), np.zeros_like(t)]  # a narrow planar loop along x
+    loop = np.arange(len(t))
+
+    def pair(tilt_a, tilt_b, yaw=0.0):
+        a, b, c = np.radians(tilt_a), np.radians(tilt_b), np.radians(yaw)
+        da = np.array([np.cos(a) * np.cos(c), np.cos(a) * np.sin(c), np.sin(a)])
+        db = np.array([-np.cos(b) * np.cos(c), np.cos(b) * np.sin(c), np.sin(b)])
+        ends = [CreaseEnd(pos=0, vertex=0, direction=da, angle=90.0, convex=True),
+                CreaseEnd(pos=12, vertex=12, direction=db, angle=90.0, convex=True)]
+        r = route_creases(V, loop, ends)
+        return r is not None and r.kinds == ["pair"]
+
+    assert PAIR_MAX_TILT < 33.0
+    assert pair(20.0, 20.0)
+    assert pair(33.0, -33.0)  # both ends past the bound, the route on the plane
+    assert pair(33.0, 5.0)
+    assert not pair(33.0, 33.0)  # both ends leaving the plane the same way
+    # the route bulging sideways over the loop (both ends turned 12° to +y)
+    assert pair(20.0, 20.0, yaw=12.0)  # within the bound: the route is not read
+    assert not pair(33.0, 5.0, yaw=12.0)

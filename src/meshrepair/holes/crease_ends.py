@@ -38,9 +38,15 @@ MIN_CORNER = 3
 meet are too often two unrelated features of an organic surface (docs/holes.md)."""
 
 PAIR_MAX_TILT = 30.0
-"""Largest angle (degrees) between a paired crease's direction and the plane the hole spans
-(orthogonal to its vector area): a crease crossing a hole runs within it; folds that dive into a
-flat cut (a statue's base) are not paired."""
+"""Largest angle (degrees) between a paired crease's directions and the plane the hole spans
+(unit normal ``n`` along its vector area): a crease crossing a hole runs within it; folds that
+dive into a flat cut (a statue's base) are not paired. Where the loop folds over a curved crease
+(a hole over a ridge of a rounded part), one end can tilt past the bound while the crease still
+crosses the hole: such a pair is kept when its mean direction is within the bound,
+``|(d_i + d_j) · n| <= 2 sin`` of it (the Hermite route's midpoint lies
+``|s| (d_i + d_j) · n / 8`` off the chord's midpoint across the plane, so the route stays near
+it; a fold tilts both ends the same way), and its route, seen through the plane, stays inside
+the loop (a route passing over the surround joins two different creases)."""
 
 MIN_CHAIN_EDGES = 8.0
 """A crease end needs a chain at least this many mean loop edge lengths long: the creases of the

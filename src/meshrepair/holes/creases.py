@@ -15,8 +15,9 @@ hole is smoothed away. Here the crease is continued explicitly:
    chord (``d_i · ŝ`` and ``-d_j · ŝ`` above ``cos`` :data:`PAIR_MAX_TURN`), have the same
    convexity, dihedral angles within :data:`PAIR_MAX_ANGLE_GAP` and chains outside the hole at
    least :data:`CHAIN_PER_GAP` ``|s|`` long (short folds are not extended across a large
-   hole), and directions within :data:`PAIR_MAX_TILT` of the plane the hole spans; pairs are
-   taken greedily
+   hole), and directions within :data:`PAIR_MAX_TILT` of the plane the hole spans (or, where
+   one end tilts past it, a mean direction within it and a route inside the loop seen through
+   that plane); pairs are taken greedily
    by ``d_i · ŝ - d_j · ŝ``. A pair is routed as the cubic Hermite curve from ``p_i`` with
    tangent ``|s| d_i`` to ``p_j`` with tangent ``-|s| d_j`` (a straight crease stays straight,
    a circular one is followed closely: end tangents from a one-sided quadratic difference, tangent
@@ -77,6 +78,38 @@ from meshrepair.holes.crease_ends import (  # noqa: F401  (re-exported)
 
 log = logging.getLogger(__name__)
 
+
+def _pair_curve(p0: np.ndarray, d0: np.ndarray, p1: np.ndarray, d1: np.ndarray) -> np.ndarray:
+    """Hermite data of a pair's route from ``p0`` (direction ``d0`` into the hole) to ``p1``
+    (direction ``d1`` into the hole): tangent length of the cubic closest to a circular arc
+    turning by ``θ``, ``|s| · 2 tan(θ/4) / sin(θ/2)``."""
+    L = float(np.linalg.norm(p1 - p0))
+    theta = float(np.arccos(np.clip(-d0 @ d1, -1.0, 1.0)))
+    m = L * (2 * np.tan(theta / 4) / np.sin(theta / 2) if theta > 1e-6 else 1.0)
+    return np.stack([p0, m * d0, p1, -m * d1])
+
+
+def _plane_polygon(P: np.ndarray, nh: np.ndarray):
+    """The loop ``P`` seen through the plane of unit normal ``nh`` (a matplotlib path), with its
+    frame ``(origin, e1, e2)``."""
+    from matplotlib.path import Path as MPath
+
+    from meshrepair.holes._geom2d import _plane_frame
+
+    e1, e2 = _plane_frame(-nh)
+    c0 = P.mean(axis=0)
+    return MPath(np.c_[(P - c0) @ e1, (P - c0) @ e2]), c0, e1, e2
+
+
+def _route_inside(poly, p0: np.ndarray, d0: np.ndarray, p1: np.ndarray, d1: np.ndarray) -> bool:
+    """Whether a pair's route (:func:`_pair_curve`) stays inside the loop seen through the hole's
+    plane (``poly`` from :func:`_plane_polygon`) between 5 % and 95 % of its length: a route
+    passing over the surround joins two different creases."""
+    path, c0, e1, e2 = poly
+    Q = CreaseRoute(curves=[_pair_curve(p0, d0, p1, d1)]).evaluate(0, np.linspace(0.05, 0.95, 19))
+    return bool(path.contains_points(np.c_[(Q - c0) @ e1, (Q - c0) @ e2]).all())
+
+
 def route_creases(V: np.ndarray, loop: np.ndarray, ends: list[CreaseEnd]) -> CreaseRoute | None:
     """Pair the crease ends of a loop and route them (None when there is nothing to route)."""
     P = V[loop]
@@ -123,8 +156,22 @@ def route_creases(V: np.ndarray, loop: np.ndarray, ends: list[CreaseEnd]) -> Cre
     if nva > 0:
         nh = va / nva
         sin_tilt = np.sin(np.radians(PAIR_MAX_TILT))
-        cand = [c for c in cand if abs(float(ends[c[1]].direction @ nh)) <= sin_tilt
-                and abs(float(ends[c[2]].direction @ nh)) <= sin_tilt]
+        poly = None
+        kept = []
+        for c in cand:
+            da, db = ends[c[1]].direction, ends[c[2]].direction
+            if max(abs(float(da @ nh)), abs(float(db @ nh))) <= sin_tilt:
+                kept.append(c)
+                continue
+            # one end tilts past the bound (a loop folding over the crease): the pair's mean
+            # direction within it, and its route inside the loop seen through the hole's plane
+            if abs(float((da + db) @ nh)) > 2 * sin_tilt:
+                continue
+            if poly is None:
+                poly = _plane_polygon(P, nh)
+            if _route_inside(poly, P[ends[c[1]].pos], da, P[ends[c[2]].pos], db):
+                kept.append(c)
+        cand = kept
     cand.sort(reverse=True)
     used: set[int] = set()
     for _, a, b in cand:
@@ -133,12 +180,8 @@ def route_creases(V: np.ndarray, loop: np.ndarray, ends: list[CreaseEnd]) -> Cre
         used.update((a, b))
         ea, eb = ends[a], ends[b]
         p0, p1 = P[ea.pos], P[eb.pos]
-        L = float(np.linalg.norm(p1 - p0))
-        # tangent length of the cubic closest to a circular arc turning by theta
-        theta = float(np.arccos(np.clip(-ea.direction @ eb.direction, -1.0, 1.0)))
-        m = L * (2 * np.tan(theta / 4) / np.sin(theta / 2) if theta > 1e-6 else 1.0)
         segs.append((ea.pos, eb.pos))
-        curves.append(np.stack([p0, m * ea.direction, p1, -m * eb.direction]))
+        curves.append(_pair_curve(p0, ea.direction, p1, eb.direction))
         kinds.append("pair")
     rest = [e for i, e in enumerate(ends) if i not in used]
     # T-junctions: a leftover crease whose line meets a paired crease ends on it (e.g. a
