@@ -186,6 +186,21 @@ def _plane_frame(n: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return e1, e2
 
 
+def loop_seen_through_plane(P: np.ndarray, nh: np.ndarray):
+    """A loop ``P`` (k, 3) seen through the plane of unit normal ``nh``: the polygon (a
+    matplotlib path, for ``contains_points``) and the projection ``X -> (X - c) [e1 e2]`` of
+    3-D points into its frame (``c`` the loop's centroid, ``e1, e2`` of :func:`_plane_frame`)."""
+    from matplotlib.path import Path as MPath
+
+    e1, e2 = _plane_frame(-nh)
+    c0 = P.mean(axis=0)
+
+    def project(X: np.ndarray) -> np.ndarray:
+        return np.c_[(X - c0) @ e1, (X - c0) @ e2]
+
+    return MPath(project(P)), project
+
+
 def _vector_area(P: np.ndarray) -> np.ndarray:
     c = P.mean(axis=0)
     Q = P - c

@@ -207,13 +207,10 @@ def _kinked_pairs(P: np.ndarray, ends: list[CreaseEnd]) -> list[tuple[int, int]]
     sin_tilt = np.sin(np.radians(PAIR_MAX_TILT))
     poly = None
     if nh is not None:
-        from matplotlib.path import Path as MPath
+        from meshrepair.holes._geom2d import loop_seen_through_plane
 
-        from meshrepair.holes._geom2d import _plane_frame
-
-        e1, e2 = _plane_frame(-nh)
-        Q = np.c_[(P - P.mean(axis=0)) @ e1, (P - P.mean(axis=0)) @ e2]
-        poly = MPath(Q)
+        poly, project = loop_seen_through_plane(P, nh)
+        Q = project(P)
     t_in = np.linspace(0.02, 0.98, 25)[:, None]
     cand = []
     for a in range(len(ends)):

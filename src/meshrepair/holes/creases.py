@@ -89,25 +89,13 @@ def _pair_curve(p0: np.ndarray, d0: np.ndarray, p1: np.ndarray, d1: np.ndarray) 
     return np.stack([p0, m * d0, p1, -m * d1])
 
 
-def _plane_polygon(P: np.ndarray, nh: np.ndarray):
-    """The loop ``P`` seen through the plane of unit normal ``nh`` (a matplotlib path), with its
-    frame ``(origin, e1, e2)``."""
-    from matplotlib.path import Path as MPath
-
-    from meshrepair.holes._geom2d import _plane_frame
-
-    e1, e2 = _plane_frame(-nh)
-    c0 = P.mean(axis=0)
-    return MPath(np.c_[(P - c0) @ e1, (P - c0) @ e2]), c0, e1, e2
-
-
 def _route_inside(poly, p0: np.ndarray, d0: np.ndarray, p1: np.ndarray, d1: np.ndarray) -> bool:
     """Whether a pair's route (:func:`_pair_curve`) stays inside the loop seen through the hole's
-    plane (``poly`` from :func:`_plane_polygon`) between 5 % and 95 % of its length: a route
-    passing over the surround joins two different creases."""
-    path, c0, e1, e2 = poly
+    plane (``poly``: :func:`meshrepair.holes._geom2d.loop_seen_through_plane`) between 5 % and
+    95 % of its length: a route passing over the surround joins two different creases."""
+    path, project = poly
     Q = CreaseRoute(curves=[_pair_curve(p0, d0, p1, d1)]).evaluate(0, np.linspace(0.05, 0.95, 19))
-    return bool(path.contains_points(np.c_[(Q - c0) @ e1, (Q - c0) @ e2]).all())
+    return bool(path.contains_points(project(Q)).all())
 
 
 def route_creases(V: np.ndarray, loop: np.ndarray, ends: list[CreaseEnd]) -> CreaseRoute | None:
@@ -168,7 +156,9 @@ def route_creases(V: np.ndarray, loop: np.ndarray, ends: list[CreaseEnd]) -> Cre
             if abs(float((da + db) @ nh)) > 2 * sin_tilt:
                 continue
             if poly is None:
-                poly = _plane_polygon(P, nh)
+                from meshrepair.holes._geom2d import loop_seen_through_plane
+
+                poly = loop_seen_through_plane(P, nh)
             if _route_inside(poly, P[ends[c[1]].pos], da, P[ends[c[2]].pos], db):
                 kept.append(c)
         cand = kept
