@@ -86,10 +86,12 @@ def locally_flipped_faces(V: np.ndarray, topo: Topology, cos_max: float = 0.0) -
     """Faces whose normal points against the sum of their edge-neighbours' normals.
 
     A face counts as folded when the angle between its normal and the mean normal of its
-    neighbours exceeds ``arccos(cos_max)`` (90° by default; no face of the clean shared meshes
-    does, the noisy ones have 2-370). A stricter 120° caught fewer fold-overs and left random-noise
-    results 1.5x worse (benchmarks/ablation.py). Such fold-overs come from noise with a
-    tangential part (random directions): the normal-driven
+    neighbours exceeds ``arccos(cos_max)`` (90° by default). A stricter 120° caught fewer
+    fold-overs and left random-noise results 1.5x worse (benchmarks/ablation.py). Most fold-overs
+    come from noise with a tangential part (random directions); a clean surface can have a few
+    too (tiny sliver faces folded back against a neighbour, at 2-14° interior angles and 0.2-8 %
+    of the mean face area: ``benchmarks/input_folds.py`` counts them, 0-113 per clean shared
+    mesh). The normal-driven
     V-update cannot unfold them (a face exactly opposite its target normal is a stationary point of
     (26)), and each one costs up to 180° of angular error.
 
