@@ -73,14 +73,19 @@ def _collinear_pair(P: np.ndarray, ea: CreaseEnd, eb: CreaseEnd, cos_par: float)
     return float(np.linalg.norm(np.cross(s, ea.direction))) <= CORNER_TOL * L
 
 
-def _exact_corner(P: np.ndarray, ends: list[CreaseEnd]):
+def _exact_corner(P: np.ndarray, ends: list[CreaseEnd], within=None):
     """A corner of three or more creases inside the hole, two of which arrive straight: two
     non-parallel ends whose lines meet in front of both (closest points within
     :data:`EXACT_CORNER_TOL` of the distance), and every other end whose direction points at
     that point within :data:`EXACT_CORNER_ARM` (a curved crease reaching the corner).
     Returns (end indices, corner point) for the group with the most ends (then the
     tightest meeting), or None when no group has three ends. Two tangent lines of one circular
-    crease also meet, which is why two ends alone never make a corner here."""
+    crease also meet, which is why two ends alone never make a corner here.
+
+    ``within`` (a predicate on a 3-D point, optional): the corner must pass it, lying within the
+    hole's extent. The crease lines of a polyhedron meet beyond its corners too (the edges of a
+    dodecahedron, extended, meet exactly at the vertices of its stellation), and such a meeting
+    point outside the hole is no corner of the patch."""
     best = None
     cos_par = np.cos(np.radians(PAIR_MAX_TURN))
     cos_arm = np.cos(np.radians(EXACT_CORNER_ARM))
@@ -106,6 +111,8 @@ def _exact_corner(P: np.ndarray, ends: list[CreaseEnd]):
             if min(ea.chain_length / t, eb.chain_length / u) < CHAIN_PER_GAP:
                 continue
             c = 0.5 * (qa + qb)
+            if within is not None and not within(c):
+                continue
             grp = [a, b]
             spread = 0.0  # how far the further arms turn to reach c
             for i, e in enumerate(ends):
