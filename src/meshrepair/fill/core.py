@@ -112,6 +112,8 @@ def _fill_core(V: np.ndarray, F: np.ndarray, holes, skip: dict[int, str], *, den
         V1 = _finite_rows(V1, V_before, new_v, "the ADMM solve")
         history, iterations, stop_reason = res.history, res.iterations, res.stop_reason
         params.update(rings=rings, max_iter=max_iter, relax=relax)
+    if creases and len(new_v):
+        V1 = _on_surround_planes(V1, F1, holes, reports, nV, nF, th)
     t3 = time.perf_counter()
     if check:
         pairs1 = self_intersections(V1, F1, new_f) if len(new_f) else None
@@ -146,3 +148,31 @@ def _fill_core(V: np.ndarray, F: np.ndarray, holes, skip: dict[int, str], *, den
         timings={"enclose": t_enclose, "initial": t_initial, "solve": t3 - t2,
                  "total": time.perf_counter() - t0},
     )
+
+
+def _on_surround_planes(V1, F1, holes, reports, nV: int, nF: int, th: float) -> np.ndarray:
+    """Each filled patch whose surround is piecewise planar placed on the envelope of its planes
+    (:mod:`meshrepair.holes.envelope`); the others unchanged."""
+    from meshrepair.holes.envelope import place_on_planes, surround_planes
+    from meshrepair.mesh.geometry import mean_edge_length
+
+    by_index = {h.index: h for h in holes}
+    by_rep = {r.index: r for r in reports}
+    le = None
+    for i, (bv, bf) in _blocks(reports, nV, nF).items():
+        h = by_index.get(i)
+        if h is None or not len(bv):
+            continue
+        planes = surround_planes(V1, F1, h.vertices, bf, th)
+        if planes is None:
+            continue
+        le = mean_edge_length(V1[:nV], F1[:nF]) if le is None else le
+        X = place_on_planes(V1, h.vertices, bv, planes, le)
+        if X is None:
+            continue
+        V1 = V1.copy()
+        V1[bv] = X
+        by_rep[i].reason += f", on the surround's {len(planes)} planes"
+        log.info("hole %d: patch placed on the %d planes of its surround", i, len(planes))
+    return V1
+
