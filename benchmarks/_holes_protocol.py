@@ -7,7 +7,8 @@ on a crease vertex, :func:`_holes_peers.pick_centres`), every method fills the c
 new faces near the cuts (centroid within ``1.5 r l̄ + 2 l̄`` of a centre, so a peer's fill of a
 mesh's own real holes or open border is not counted) are compared with the removed faces:
 symmetric mean distance / bounding-box diagonal and mean normal deviation
-(:func:`_holes_peers.measure`), wall time and resident-memory high-water mark above the RSS
+(:func:`_holes_peers.measure`), the same mean with every sample weighted by the area it stands
+for (:func:`area_weighted_mean`), wall time and resident-memory high-water mark above the RSS
 before the fill. Holes a method leaves open count as not filled (``filled`` column: cut loops
 closed / cut loops); meshrepair's records also list its skipped loops and notes (``notes``).
 
@@ -27,10 +28,38 @@ from scipy.spatial import cKDTree
 
 from meshrepair.mesh.geometry import mean_edge_length
 from meshrepair.mesh.topology import boundary_loops
+from meshrepair.metrics import point_to_surface
 from meshrepair.synthetic import cut_holes
 
 CAD = ("fandisk", "twelve", "sharp_sphere", "trim_star", "rocker_arm", "screwdriver")
 ORGANIC = ("spot", "bunny", "nicolo", "camelhead", "nefertiti", "igea")
+
+
+_BARY = np.array([(1 / 3, 1 / 3, 1 / 3), (2 / 3, 1 / 6, 1 / 6), (1 / 6, 2 / 3, 1 / 6),
+                  (1 / 6, 1 / 6, 2 / 3)])
+
+
+def _area_samples(V, F):
+    """Four barycentric points per face and the area each stands for (a quarter of its face's)."""
+    T = V[F]
+    area = 0.5 * np.linalg.norm(np.cross(T[:, 1] - T[:, 0], T[:, 2] - T[:, 0]), axis=1)
+    return np.einsum("kb,fbd->fkd", _BARY, T).reshape(-1, 3), np.repeat(area / 4, 4)
+
+
+def area_weighted_mean(V, F, V_ref, F_ref) -> float:
+    """Symmetric mean surface distance between two meshes with every sample weighted by the area
+    it stands for: ``(∫_P d(x, G) dA / |P| + ∫_G d(y, P) dA / |G|) / 2``. The ``mean`` of
+    :func:`meshrepair.metrics.distances` counts vertices and a fixed number of points per face
+    alike, so a region of a patch weighs by its number of faces: a patch with large triangles
+    where it is far from the truth (or where there is no truth, as over an open border merged
+    with a cut) weighs that region less than a patch of uniform density."""
+    p, wp = _area_samples(V, F)
+    g, wg = _area_samples(V_ref, F_ref)
+    if wp.sum() <= 0 or wg.sum() <= 0:
+        return float("nan")
+    a = point_to_surface(p, V_ref, F_ref)
+    b = point_to_surface(g, V, F)
+    return float(0.5 * ((a * wp).sum() / wp.sum() + (b * wg).sum() / wg.sum()))
 
 
 def _meshlib_plain(V, F, hc):
@@ -134,7 +163,9 @@ def run_protocol(lines: list[str], notes: list[str], meshes, radii, seeds, out_j
                         mm, _, nd, _, _, _ = hp.measure(V, F[removed], V, F, Vo, Fo, new[near],
                                                         diag, le)
                         c, n = _cut_loops_closed(Vc, Fc, Vo, Fo, cut_v)
-                        rec.update(mean=mm, normal=nd, closed=c, loops=n)
+                        ma = (area_weighted_mean(Vo, Fo[new[near]], V, F[removed]) / diag
+                              if near.any() else float("nan"))
+                        rec.update(mean=mm, mean_area=ma, normal=nd, closed=c, loops=n)
                         if m == "meshrepair" and hp.LAST_NOTES:
                             rec["notes"] = list(hp.LAST_NOTES)
                     else:
@@ -152,15 +183,20 @@ def run_protocol(lines: list[str], notes: list[str], meshes, radii, seeds, out_j
 
 def table(recs: list[dict]) -> list[str]:
     """Markdown table: per (mesh, r) and method, the mean over seeds of the patch distance
-    (×1e-3 of the diagonal), the normal deviation, time, memory and the cut loops closed;
-    then meshrepair against the best peer on each figure."""
-    out = ["| mesh | r (l̄) | method | seeds | mean e-3 | normal° | t s | MB | closed |",
-           "|---|---:|---|---:|---:|---:|---:|---:|---|"]
+    (×1e-3 of the diagonal; with records that carry it, the area-weighted one too), the normal
+    deviation, time, memory and the cut loops closed; then meshrepair against the best peer on
+    each figure."""
+    aw = any("mean_area" in x for x in recs)  # area-weighted mean in the records
+    out = ["| mesh | r (l̄) | method | seeds | mean e-3 | " + ("area-w e-3 | " if aw else "")
+           + "normal° | t s | MB | closed |",
+           "|---|---:|---|---:|---:|" + ("---:|" if aw else "") + "---:|---:|---:|---|"]
     keys = sorted({(r["mesh"], r["r"]) for r in recs}, key=lambda k: (k[0], k[1]))
-    ratio_rows = ["", "| mesh | r (l̄) | meshrepair mean / best peer (who) | meshrepair normal / "
-                  "best peer (who) |", "|---|---:|---|---|"]
+    ratio_rows = ["", "| mesh | r (l̄) | meshrepair mean / best peer (who) | "
+                  + ("meshrepair area-w / best peer (who) | " if aw else "")
+                  + "meshrepair normal / best peer (who) |",
+                  "|---|---:|---|---|" + ("---|" if aw else "")]
     for mesh, r in keys:
-        best_m, best_n = (np.inf, ""), (np.inf, "")
+        best_m, best_n, best_a = (np.inf, ""), (np.inf, ""), (np.inf, "")
         ours = None
         for m in METHODS:
             rs = [x for x in recs if x["mesh"] == mesh and x["r"] == r and x["method"] == m]
@@ -169,21 +205,27 @@ def table(recs: list[dict]) -> list[str]:
             ok = [x for x in rs if "mean" in x and np.isfinite(x["mean"])]
             mean = float(np.mean([x["mean"] for x in ok])) if ok else float("nan")
             nd = float(np.mean([x["normal"] for x in ok])) if ok else float("nan")
+            ma = float(np.mean([x.get("mean_area", np.nan) for x in ok])) if ok else float("nan")
             c = sum(x.get("closed", 0) for x in rs)
             n = sum(x.get("loops", 0) for x in rs)
             fails = sum("error" in x for x in rs)
-            out.append(f"| {mesh} | {r} | {m} | {len(rs)} | {mean * 1e3:.3f} | {nd:.2f} | "
+            out.append(f"| {mesh} | {r} | {m} | {len(rs)} | {mean * 1e3:.3f} | "
+                       + (f"{ma * 1e3:.3f} | " if aw else "") + f"{nd:.2f} | "
                        f"{np.mean([x['t'] for x in rs]):.2f} | "
                        f"{np.mean([x['mem_mb'] for x in rs]):.0f} | {c}/{n}"
                        f"{f', {fails} failed' if fails else ''} |")
             if m == "meshrepair":
-                ours = (mean, nd)
+                ours = (mean, nd, ma)
             elif ok:
                 if mean < best_m[0]:
                     best_m = (mean, m)
+                if ma < best_a[0]:
+                    best_a = (ma, m)
                 if nd < best_n[0]:
                     best_n = (nd, m)
         if ours is not None and np.isfinite(best_m[0]):
+            area = (f"{ours[2] / best_a[0]:.2f}× ({best_a[1]}) | " if np.isfinite(best_a[0])
+                    else "- | ") if aw else ""
             ratio_rows.append(f"| {mesh} | {r} | {ours[0] / best_m[0]:.2f}× ({best_m[1]}) | "
-                              f"{ours[1] / best_n[0]:.2f}× ({best_n[1]}) |")
+                              + area + f"{ours[1] / best_n[0]:.2f}× ({best_n[1]}) |")
     return out + ratio_rows
