@@ -155,15 +155,17 @@ def _on_surround_planes(V1, F1, holes, reports, nV: int, nF: int, th: float) -> 
     (:mod:`meshrepair.holes.envelope`); the others unchanged."""
     from meshrepair.holes.envelope import place_on_planes, surround_planes
     from meshrepair.mesh.geometry import mean_edge_length
+    from meshrepair.mesh.topology import vertex_face_incidence
 
     by_index = {h.index: h for h in holes}
     by_rep = {r.index: r for r in reports}
+    vf = vertex_face_incidence(F1, len(V1))
     le = None
     for i, (bv, bf) in _blocks(reports, nV, nF).items():
         h = by_index.get(i)
         if h is None or not len(bv):
             continue
-        planes = surround_planes(V1, F1, h.vertices, bf, th)
+        planes = surround_planes(V1, F1, h.vertices, bf, th, incidence=vf)
         if planes is None:
             continue
         le = mean_edge_length(V1[:nV], F1[:nF]) if le is None else le

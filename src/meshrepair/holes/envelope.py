@@ -53,7 +53,7 @@ RIM_TOL = 0.02
 
 
 def surround_planes(V: np.ndarray, F: np.ndarray, loop: np.ndarray, patch_faces: np.ndarray,
-                    th: float = 30.0) -> np.ndarray | None:
+                    th: float = 30.0, incidence=None) -> np.ndarray | None:
     """The planes of a piecewise-planar surround (module docstring, *Reading*).
 
     Parameters
@@ -64,22 +64,26 @@ def surround_planes(V: np.ndarray, F: np.ndarray, loop: np.ndarray, patch_faces:
     th : degrees, the sharp-edge threshold: two planes of the surround meet at a crease, their
         faces across it at a dihedral angle of at least ``th`` (a tessellated cylinder, whose
         facets turn by a few degrees, is a curved surround)
+    incidence : the ``(nV, nF)`` vertex-face incidence of ``F``
+        (:func:`meshrepair.mesh.topology.vertex_face_incidence`), when the caller has it: the
+        rings are then grown locally instead of over every face
 
     Returns
     -------
     (p, 4) float64 rows ``(n_x, n_y, n_z, d)``, or None when the surround is not piecewise planar
     """
     from meshrepair.mesh.geometry import face_normals
+    from meshrepair.mesh.topology import vertex_face_incidence
 
+    vf = vertex_face_incidence(F, len(V)) if incidence is None else incidence
     skip = np.zeros(len(F), bool)
     skip[patch_faces] = True
-    near = np.zeros(len(V), bool)
-    near[loop] = True
-    ring = np.zeros(len(F), bool)
+    verts = np.unique(np.asarray(loop, np.int64))
+    idx = np.zeros(0, np.int64)
     for _ in range(RINGS):
-        ring = near[F].any(axis=1) & ~skip
-        near[F[ring].ravel()] = True
-    idx = np.flatnonzero(ring)
+        idx = np.unique(vf[verts].indices)
+        idx = idx[~skip[idx]]
+        verts = np.unique(F[idx].ravel())
     if len(idx) < MIN_FACES:
         return None
     N = face_normals(V, F[idx])
