@@ -242,9 +242,10 @@ def test_hole_wrapping_a_thin_wall_is_filled_by_the_minimum_weight_fallback(fand
         res = fill_holes(Vc, Fc)
     assert res.holes[0].status == "filled", res.summary()
     assert "intersects the surface" in res.holes[0].note and "check it" in res.holes[0].note
-    assert res.holes[0].n_intersections > 0
     # of the variants tried (faired, 0.5 and 0.25 faired, membrane), the one with the fewest
-    # intersecting face pairs is kept, and the solve does not add any
+    # intersecting face pairs is kept, and the solve does not add any (measured: the membrane's
+    # 3 pairs, none after the solve; 157 and 155 while an exact crease corner beyond the hole
+    # was allowed)
     tried = [int(m.group(1)) for r in caplog.records
              if (m := re.search(r"hole 0 \(auto\): .*, (\d+) face pairs", r.getMessage()))]
     assert len(tried) == 4, tried
