@@ -8,6 +8,7 @@ import numpy as np
 from meshrepair.fill import inpaint
 from meshrepair.holes.creases import CreaseEnd, _exact_corner, route_creases
 from meshrepair.mesh.geometry import face_normals
+from meshrepair.mesh.topology import boundary_loops
 from meshrepair.mesh.validate import check_mesh
 
 
@@ -81,7 +82,7 @@ def test_exact_corner_beyond_the_hole_refused():
     """Two straight crease lines and a third end all meet at (0, 2, 0), beyond a loop of radius 1
     round the origin (as the extended edges of a polyhedron meet at the vertices of its
     stellation): a corner there is no corner of the patch."""
-    from meshrepair.holes.creases import _within_reach
+    from meshrepair.holes._geom2d import within_reach
 
     t = np.linspace(0, 2 * np.pi, 24, endpoint=False)
     P = np.c_[np.cos(t), np.sin(t), np.zeros_like(t)]
@@ -89,7 +90,7 @@ def test_exact_corner_beyond_the_hole_refused():
     ends = [_end(i, target - P[i], straight=20.0) for i in (0, 12, 6)]
     grp, c = _exact_corner(P, ends)
     assert sorted(grp) == [0, 1, 2] and np.linalg.norm(c - target) < 1e-6
-    assert _exact_corner(P, ends, within=_within_reach(P)) is None
+    assert _exact_corner(P, ends, within=within_reach(P)) is None
 
 
 def _dodecahedron(size: float = 0.08):
@@ -164,5 +165,16 @@ def test_surround_planes_of_curved_and_planar_surrounds():
     assert "3 planes" in h.reason, h.reason
     N = face_normals(res.V, res.F)[res.new_faces]
     assert np.degrees(np.arccos(np.clip(np.abs(N).max(axis=1), -1, 1))).max() < 1e-6
-    P = surround_planes(res.V, res.F, np.arange(0), res.new_faces)  # no loop: no surround
-    assert P is None
+    # a tessellated cylinder (64 facets, 5.6° apart) is a curved surround at the sharp-edge
+    # threshold, and its facets are planes only for a threshold below their turn
+    c = trimesh.creation.cylinder(radius=1.0, height=2.0, sections=64)
+    Vc, Fc = trimesh.remesh.subdivide_to_size(c.vertices, c.faces, 0.1)
+    m = trimesh.Trimesh(Vc, Fc, process=False)
+    m.merge_vertices()
+    Vc, Fc = np.asarray(m.vertices, float), np.asarray(m.faces, np.int64)
+    cut = np.linalg.norm(Vc[Fc].mean(axis=1) - np.array([1.0, 0.0, 0.0]), axis=1) < 0.3
+    Fk = Fc[~cut]
+    loop = boundary_loops(Fk)[0]
+    assert surround_planes(Vc, Fk, loop, np.zeros(0, np.int64), th=30.0) is None
+    P = surround_planes(Vc, Fk, loop, np.zeros(0, np.int64), th=3.0)
+    assert P is not None and len(P) >= 5

@@ -201,6 +201,16 @@ def loop_seen_through_plane(P: np.ndarray, nh: np.ndarray):
     return MPath(project(P)), project
 
 
+def within_reach(P: np.ndarray):
+    """Predicate on 3-D points ``X`` (n, 3) or one point: within the extent of the hole bounded
+    by the loop ``P`` (k, 3), no farther from the loop's centroid than its farthest vertex (a
+    patch spanning the loop lies in that ball unless it bulges past its own rim)."""
+    c = P.mean(axis=0)
+    R = float(np.linalg.norm(P - c, axis=1).max())
+    return lambda X: bool(np.all(np.linalg.norm(np.atleast_2d(np.asarray(X, float)) - c,
+                                                axis=1) <= R))
+
+
 def _vector_area(P: np.ndarray) -> np.ndarray:
     c = P.mean(axis=0)
     Q = P - c

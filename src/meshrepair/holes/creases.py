@@ -29,7 +29,8 @@ hole is smoothed away. Here the crease is continued explicitly:
    ``c``: the corner where three creases of a box meet is rebuilt at the lines' intersection.
    An exact corner (two straight lines that meet, :func:`.crease_corners._exact_corner`) must
    lie within the hole's extent, no farther from the loop's centroid than its farthest vertex
-   (:func:`_within_reach`): the extended edges of a polyhedron also meet beyond its corners.
+   (:func:`meshrepair.holes._geom2d.within_reach`): the extended edges of a polyhedron also
+   meet beyond its corners.
    A single leftover end whose line meets a paired crease ends there (a T-junction: the pair is
    split at the meeting point).
 
@@ -101,15 +102,6 @@ def _route_inside(poly, p0: np.ndarray, d0: np.ndarray, p1: np.ndarray, d1: np.n
     return bool(path.contains_points(project(Q)).all())
 
 
-def _within_reach(P: np.ndarray):
-    """Predicate: a 3-D point lies within the hole's extent, no farther from the loop's centroid
-    than the loop's farthest vertex (a patch spanning the loop lies in that ball unless it
-    bulges past its own rim)."""
-    c = P.mean(axis=0)
-    R = float(np.linalg.norm(P - c, axis=1).max())
-    return lambda X: bool(np.linalg.norm(np.asarray(X, float) - c) <= R)
-
-
 def route_creases(V: np.ndarray, loop: np.ndarray, ends: list[CreaseEnd]) -> CreaseRoute | None:
     """Pair the crease ends of a loop and route them (None when there is nothing to route)."""
     P = V[loop]
@@ -121,7 +113,9 @@ def route_creases(V: np.ndarray, loop: np.ndarray, ends: list[CreaseEnd]) -> Cre
     segs, curves, kinds = [], [], []
     points_t: list[np.ndarray] = []
     view = np.zeros(3)
-    corner = _exact_corner(P, ends, within=_within_reach(P))
+    from meshrepair.holes._geom2d import within_reach
+
+    corner = _exact_corner(P, ends, within=within_reach(P))
     if corner is not None:
         grp, c = corner
         points_t.append(c)

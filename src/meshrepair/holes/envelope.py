@@ -73,7 +73,7 @@ def surround_planes(V: np.ndarray, F: np.ndarray, loop: np.ndarray, patch_faces:
     (p, 4) float64 rows ``(n_x, n_y, n_z, d)``, or None when the surround is not piecewise planar
     """
     from meshrepair.mesh.geometry import face_normals
-    from meshrepair.mesh.topology import vertex_face_incidence
+    from meshrepair.mesh.topology import edge_topology, vertex_face_incidence
 
     vf = vertex_face_incidence(F, len(V)) if incidence is None else incidence
     skip = np.zeros(len(F), bool)
@@ -103,12 +103,8 @@ def surround_planes(V: np.ndarray, F: np.ndarray, loop: np.ndarray, patch_faces:
         d = float(np.median(V[F[idx[grp]]].reshape(-1, 3) @ n))
         planes.append((*n, d))
     # faces of two planes that share an edge meet at a crease
-    e = np.sort(np.concatenate([F[idx][:, [0, 1]], F[idx][:, [1, 2]], F[idx][:, [2, 0]]]), axis=1)
-    owner = np.tile(np.arange(len(idx)), 3)
-    order = np.lexsort((e[:, 1], e[:, 0]))
-    e, owner = e[order], owner[order]
-    same = np.all(e[1:] == e[:-1], axis=1)
-    a, b = owner[:-1][same], owner[1:][same]
+    ef = edge_topology(F[idx], len(V)).edge_faces
+    a, b = ef[ef[:, 1] >= 0].T
     cross = label[a] != label[b]
     if np.any(np.einsum("ij,ij->i", N[a[cross]], N[b[cross]]) > np.cos(np.radians(th))):
         return None
@@ -130,9 +126,10 @@ def place_on_planes(V: np.ndarray, loop: np.ndarray, inner: np.ndarray, planes: 
     -------
     (q, 3) float64 new positions of ``inner``, or None when the loop lies on no envelope
     """
+    from meshrepair.holes._geom2d import _vector_area, within_reach
+
     P = V[loop]
-    Q = P - P.mean(axis=0)
-    va = 0.5 * np.cross(Q, np.roll(Q, -1, axis=0)).sum(axis=0)
+    va = _vector_area(P)
     if not np.linalg.norm(va) > 0:
         return None
     nrm, off = planes[:, :3], planes[:, 3]
@@ -152,8 +149,4 @@ def place_on_planes(V: np.ndarray, loop: np.ndarray, inner: np.ndarray, planes: 
         return None
     # a plane missing from the surround (a face wholly inside the hole) leaves the envelope
     # rising towards where the others meet, beyond the hole's extent
-    c = P.mean(axis=0)
-    reach = float(np.linalg.norm(P - c, axis=1).max())
-    if float(np.linalg.norm(best[1] - c, axis=1).max()) > reach:
-        return None
-    return best[1]
+    return best[1] if within_reach(P)(best[1]) else None
