@@ -52,6 +52,13 @@ ends bends the patch away from its surround's tangent planes, which the seam sho
 inferred tightly (pairs along their chord, corners of at most three arms) are kept as they are:
 on small holes the seam of the faired patch does not tell them from the smooth patch."""
 
+CONFORMING_RETRY = True
+"""A Liepa patch (folds of its coarse triangulation divided into pieces of the edge length)
+whose faired position intersects the surface is meshed again with its folds split by Triangle
+for its angle bound (``enclose_loop(conforming=True)``) before any of the fairing is given up:
+much finer along the folds, its thin plate bends less away from the coarse surface, which
+follows the surround (docs/holes.md section 3)."""
+
 CORNER_MAX_ARMS = 3
 """A corner with more arms than this is a loose inference (the arms beyond the two meeting
 exactly only point at the corner within 45°)."""
@@ -117,6 +124,7 @@ def _place_patches(V: np.ndarray, F: np.ndarray, holes, skip: dict[int, str], *,
     no_routes: set[int] = set()  # holes enclosed without their crease routes
     route_done: set[int] = set()  # holes whose crease trial is decided
     route_stage: dict[int, int] = {}  # hole -> its enclosing stage with the routes
+    conforming: set[int] = set()  # holes whose Liepa patch is meshed conforming to its folds
 
     def _seen(i: int, n_x: int, frac: float) -> None:
         st = stage.get(i, 0)
@@ -133,7 +141,7 @@ def _place_patches(V: np.ndarray, F: np.ndarray, holes, skip: dict[int, str], *,
             V, F, holes, skip, edge_length=edge_length, check=check, intersections=False,
             method=method, creases={i: r for i, r in routes.items() if i not in no_routes},
             known_holes=set(known_holes) | set(kept_holes),
-            unpair=set(unpair),
+            unpair=set(unpair), conforming=set(conforming),
             progress=None if progress is None or not first else progress)
         first = False
         tb = time.perf_counter()
@@ -209,6 +217,16 @@ def _place_patches(V: np.ndarray, F: np.ndarray, holes, skip: dict[int, str], *,
                     route_done.add(i)
                     no_routes.discard(i)
                     goto[i] = route_stage[i]
+                    again = True
+                    continue
+                if n_x and CONFORMING_RETRY and method[i] == "liepa" and i not in conforming \
+                        and initial == "bilaplacian":
+                    # the faired Liepa patch intersects: meshed again with its folds split for
+                    # the angle bound (finer along them, the fairing bends less away from the
+                    # coarse surface) before any of the fairing is given up
+                    log.debug("hole %d (liepa): faired patch, %d face pairs; meshing it again "
+                              "conforming to its folds", i, n_x)
+                    conforming.add(i)
                     again = True
                     continue
                 _seen(i, n_x, 1.0)

@@ -89,7 +89,8 @@ def enclose_holes(V: np.ndarray, F: np.ndarray, holes: Sequence[Hole],
                   creases: Mapping[int, np.ndarray] | None = None,
                   progress: Callable[[int, int], None] | None = None,
                   known_holes: set[int] | frozenset[int] = frozenset(),
-                  unpair: set[int] | frozenset[int] = frozenset()
+                  unpair: set[int] | frozenset[int] = frozenset(),
+                  conforming: set[int] | frozenset[int] = frozenset()
                   ) -> tuple[np.ndarray, np.ndarray, list[HoleReport]]:
     """Enclose the selected holes of a mesh with initial (membrane) patches.
 
@@ -122,6 +123,10 @@ def enclose_holes(V: np.ndarray, F: np.ndarray, holes: Sequence[Hole],
     unpair : set of int
         Loops never paired with an island (each is enclosed on its own): the caller's retry
         when their annulus intersects the surface.
+    conforming : set of int
+        Loops whose Liepa patch is meshed with its folds split by Triangle
+        (``enclose_loop(conforming=True)``): the caller's retry when the faired patch
+        intersects the surface.
 
     Returns
     -------
@@ -213,7 +218,8 @@ def enclose_holes(V: np.ndarray, F: np.ndarray, holes: Sequence[Hole],
                 Fcur = np.concatenate([F, *newF]) if newF else F
                 patch = enclose_loop(V[h.vertices], edge_length=h_len, method="liepa",
                                      opposite=_opposite_points(V, F, h.vertices),
-                                     forbidden=_loop_chords(Fcur, h.vertices))
+                                     forbidden=_loop_chords(Fcur, h.vertices),
+                                     conforming=h.index in conforming)
             else:
                 gverts = h.vertices
                 cr = None if creases is None else creases.get(h.index)

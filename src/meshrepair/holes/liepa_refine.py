@@ -200,8 +200,27 @@ def _locate(Q: np.ndarray, Tc: np.ndarray, pts: np.ndarray) -> tuple[np.ndarray,
     return owner, bc
 
 
+def _divided_folds(Q: np.ndarray, folds: np.ndarray, h: float) -> tuple[np.ndarray, np.ndarray]:
+    """The layout's points with each fold ``(i, j)`` divided into ``max(1, round(L / h))`` equal
+    pieces (``L`` its length in the layout): ``(points (k + m, 2), segments (s, 2))``, the new
+    points after the ``k`` loop vertices, in fold order."""
+    k = len(Q)
+    a, b = Q[folds[:, 0]], Q[folds[:, 1]]
+    n = np.maximum(1, np.rint(np.linalg.norm(b - a, axis=1) / h)).astype(np.int64)
+    extra, segs = [], []
+    nxt = k
+    for (i, j), p, q, m in zip(folds.tolist(), a, b, n.tolist(), strict=True):
+        t = np.arange(1, m)[:, None] / m
+        extra.append(p + t * (q - p))
+        ids = np.r_[i, nxt + np.arange(m - 1), j]
+        nxt += m - 1
+        segs.append(np.c_[ids[:-1], ids[1:]])
+    return np.concatenate([Q, *extra]), np.concatenate(segs).astype(np.int64)
+
+
 def _refine_on_triangulation(k: int, S: np.ndarray, Ts: np.ndarray, Qs: np.ndarray, h: float, *,
-                             isometric: bool, creases: np.ndarray | None = None
+                             isometric: bool, creases: np.ndarray | None = None,
+                             conforming: bool = False
                              ) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
     """Remesh the triangulated surface ``(S, Ts)`` spanning a loop to edge length ``h``.
 
@@ -210,10 +229,17 @@ def _refine_on_triangulation(k: int, S: np.ndarray, Ts: np.ndarray, Qs: np.ndarr
     polygon containing the rest of the layout. Triangle meshes that polygon (no Steiner point on
     the loop, minimum angle :data:`MIN_ANGLE`) and every new vertex is mapped to 3-D by the affine
     map of the triangle of ``Ts`` containing it, so it lies on the surface. ``creases (q, 2)``
-    (pairs of loop vertices: edges of ``Ts`` where it folds) are kept as constraints (Triangle
-    may split them), so no new edge cuts across a fold and the new triangles lie on the surface
-    too; other edges of ``Ts`` are not, because fans of chords meeting at small angles at a loop
-    vertex force tiny triangles there. For an ``isometric`` layout the 3-D edge length is the
+    (pairs of loop vertices: edges of ``Ts`` where it folds) stay edges of the result, so no new
+    edge cuts across a fold and the new triangles lie on the surface too; other edges of ``Ts``
+    do not, because fans of chords meeting at small angles at a loop vertex force tiny triangles
+    there. Each fold is divided into ``round(L / h)`` equal pieces beforehand and Triangle may
+    not split a segment further (``YY``): where folds fan out of a loop vertex at small angles,
+    splitting them for the angle bound cascades into thousands of tiny triangles (Triangle's
+    refinement near small input angles); with fixed pieces the triangles there are as thin as
+    the fan but no smaller than its pieces. With ``conforming`` Triangle splits the folds for its
+    angle bound instead (a patch much finer along the folds: the fallback of
+    :func:`meshrepair.fill` when the quality patch, faired, intersects the surface). For an
+    ``isometric`` layout the 3-D edge length is the
     2-D one; otherwise the area bounds are corrected by the 2-D/3-D area ratio of each new
     triangle with two rounds of Triangle's refinement (``r``).
 
@@ -225,8 +251,15 @@ def _refine_on_triangulation(k: int, S: np.ndarray, Ts: np.ndarray, Qs: np.ndarr
 
     Q = Qs[:k]
     segs = np.c_[np.arange(k), (np.arange(k) + 1) % k]
+    pts, no_split = Q, ""
     if creases is not None and len(creases):
-        segs = np.r_[segs, np.asarray(creases, dtype=np.int64).reshape(-1, 2)]
+        cr = np.asarray(creases, dtype=np.int64).reshape(-1, 2)
+        if conforming:
+            segs = np.r_[segs, cr]
+        else:
+            pts, fold_segs = _divided_folds(Q, cr, h)
+            segs = np.r_[segs, fold_segs]
+            no_split = "Y"  # with the "Y" of opts: no Steiner point on any segment
     target = _max_area_for(h)
 
     def lift(X2):
@@ -254,8 +287,8 @@ def _refine_on_triangulation(k: int, S: np.ndarray, Ts: np.ndarray, Qs: np.ndarr
         # away: a 105-loop gave 1.2 M triangles); reaching the bound gives the layout up (None),
         # and the caller falls back to the mean-value layout
         cap = int(STEINER_FACTOR * float(areas(Qs, Ts).sum()) / amax) + 4 * k + 100
-        out = triangle.triangulate({"vertices": Q, "segments": segs},
-                                   opts + f"S{cap}" + _area_switch(amax))
+        out = triangle.triangulate({"vertices": pts, "segments": segs},
+                                   opts + no_split + f"S{cap}" + _area_switch(amax))
     else:
         # mean-value layout: the last resort, capped too (a loop through a far-away vertex is a
         # sliver whose quality mesh is unbounded): past the cap, MeshRepairError; the two
@@ -358,7 +391,7 @@ def _creases(P: np.ndarray, T: np.ndarray, min_deg: float) -> np.ndarray:
 
 
 def _enclose_liepa(P: np.ndarray, h: float, opposite: np.ndarray | None,
-                   forbidden: np.ndarray | None) -> Patch:
+                   forbidden: np.ndarray | None, *, conforming: bool = False) -> Patch:
     """Liepa's triangulation of the loop, remeshed to edge length ``h`` on its own surface.
 
     1. :func:`min_weight_triangulation` (no interior vertices).
@@ -368,10 +401,11 @@ def _enclose_liepa(P: np.ndarray, h: float, opposite: np.ndarray | None,
        mean-value embedding with the loop on the unit circle by arc length (a convex boundary:
        always valid, but anisotropic where the surface is far from developable).
     3. :func:`_refine_on_triangulation`: Triangle meshes the layout to the target size, keeping
-       the folds of the coarse surface (:data:`LIEPA_CREASE`) as edges in the developed layout,
-       and every new vertex is placed on the coarse surface by the affine map of the triangle it
-       falls in; with the developed layout the patch lies on the coarse surface up to the
-       smaller folds, with the mean-value layout its vertices do.
+       the folds of the coarse surface (:data:`LIEPA_CREASE`) as edges in the developed layout
+       (divided into pieces of about ``h``; split by Triangle for its angle bound instead with
+       ``conforming``), and every new vertex is placed on the coarse surface by the affine map
+       of the triangle it falls in; with the developed layout the patch lies on the coarse
+       surface up to the smaller folds, with the mean-value layout its vertices do.
     """
     k = len(P)
     Tc = min_weight_triangulation(P, opposite=opposite, forbidden=forbidden)
@@ -381,7 +415,8 @@ def _enclose_liepa(P: np.ndarray, h: float, opposite: np.ndarray | None,
     layout = "developed"
     if Q is not None:
         res = _refine_on_triangulation(k, P, Tc, Q, h, isometric=True,
-                                       creases=_creases(P, Tc, LIEPA_CREASE))
+                                       creases=_creases(P, Tc, LIEPA_CREASE),
+                                       conforming=conforming)
     if res is None:
         S, Ts = P, Tc
         # the target patch has about area / (√3/4 h²) triangles; subdividing beyond a few times

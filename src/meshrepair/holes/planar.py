@@ -34,7 +34,8 @@ ENCLOSE_METHODS = ("auto", "liepa")
 
 def enclose_loop(P: np.ndarray, *, edge_length: float | None = None, method: str = "auto",
                  opposite: np.ndarray | None = None,
-                 forbidden: np.ndarray | None = None, creases=None) -> Patch:
+                 forbidden: np.ndarray | None = None, creases=None,
+                 conforming: bool = False) -> Patch:
     """Triangulate the hole bounded by the closed 3-D polygon ``P``.
 
     Parameters
@@ -54,6 +55,10 @@ def enclose_loop(P: np.ndarray, *, edge_length: float | None = None, method: str
         ``"liepa"`` only: third vertex of the existing face on each loop edge.
     forbidden : (q, 2) int, optional
         ``"liepa"`` only: local index pairs that are existing edges (not to be used as chords).
+    conforming : bool
+        ``"liepa"`` only: let Triangle split the folds of the coarse triangulation for its angle
+        bound (a patch much finer along them) instead of dividing them into pieces of the edge
+        length first (see :func:`_refine_on_triangulation`).
     creases : CreaseRoute, optional
         ``"auto"`` only: crease segments to route through the patch as constrained edges of the
         planar triangulation (:mod:`.creases`); their vertices are placed on the crease curves
@@ -91,7 +96,7 @@ def enclose_loop(P: np.ndarray, *, edge_length: float | None = None, method: str
     if method == "liepa":
         from meshrepair.holes.liepa_refine import _enclose_liepa
 
-        return _enclose_liepa(P, h, opposite, forbidden)
+        return _enclose_liepa(P, h, opposite, forbidden, conforming=conforming)
     segs = np.c_[np.arange(k), (np.arange(k) + 1) % k]
     c = P.mean(axis=0)
     candidates: list[tuple[str, np.ndarray]] = []
