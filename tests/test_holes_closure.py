@@ -53,6 +53,20 @@ def test_winding_number_of_a_closed_sphere_is_one_inside_zero_outside():
     assert np.allclose(w, [1, 1, 0, 0], atol=1e-9)
 
 
+@pytest.mark.parametrize("chunk", [1, 7, 1280, 10**9])
+def test_winding_number_blocks_over_points_and_faces(chunk):
+    """Blocks of ``chunk`` (point, face) pairs, over the points and over the faces (icosphere 4:
+    5120 faces), give the one-block sum."""
+    s = trimesh.creation.icosphere(4)
+    V, F = np.asarray(s.vertices), np.asarray(s.faces)
+    P = np.random.default_rng(3).normal(size=(9, 3))
+    ref = solid_angle_sum(V, F, P, chunk=10**12)
+    assert np.allclose(solid_angle_sum(V, F, P, chunk=chunk), ref, atol=1e-12)
+    r = np.linalg.norm(P, axis=1)
+    far = np.abs(r - 1.0) > 0.02  # off the (polyhedral) sphere: 1 inside, 0 outside
+    assert far.sum() >= 5 and np.allclose(ref[far], r[far] < 1.0, atol=1e-9)
+
+
 def test_sphere_with_holes_is_enclosed_a_relief_is_not():
     s = trimesh.creation.icosphere(4)
     V, F = np.asarray(s.vertices), np.asarray(s.faces)
