@@ -238,10 +238,11 @@ def _refine_on_triangulation(k: int, S: np.ndarray, Ts: np.ndarray, Qs: np.ndarr
     refinement near small input angles); with fixed pieces the triangles there are as thin as
     the fan but no smaller than its pieces. With ``conforming`` Triangle splits the folds for its
     angle bound instead (a patch much finer along the folds: the fallback of
-    :func:`meshrepair.fill` when the quality patch, faired, intersects the surface). For an
-    ``isometric`` layout the 3-D edge length is the
-    2-D one; otherwise the area bounds are corrected by the 2-D/3-D area ratio of each new
-    triangle with two rounds of Triangle's refinement (``r``).
+    :func:`meshrepair.fill.fill_holes` when the divided patch, faired, intersects the surface).
+    For an ``isometric`` layout the 3-D edge length is the 2-D one; otherwise the area bounds are
+    corrected by the 2-D/3-D area ratio of each new triangle with two rounds of Triangle's
+    refinement (``r``). The Steiner bound of the developed layout counts the points Triangle
+    adds, not the fold points given to it.
 
     Returns
     -------
@@ -309,7 +310,7 @@ def _refine_on_triangulation(k: int, S: np.ndarray, Ts: np.ndarray, Qs: np.ndarr
     X2 = np.asarray(out["vertices"], dtype=np.float64)
     T = np.asarray(out.get("triangles", np.empty((0, 3))), dtype=np.int64).reshape(-1, 3)
     if len(T) == 0 or len(X2) < k or not np.allclose(X2[:k], Q) \
-            or (isometric and len(X2) - k >= cap):
+            or (isometric and len(X2) - len(pts) >= cap):
         return None
     return lift(X2), T, X2
 
