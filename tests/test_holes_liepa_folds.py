@@ -50,6 +50,7 @@ def test_divided_folds_stay_edges_without_tiny_triangles(case):
 
     div = LR._enclose_liepa(P, h, None, None)
     conf = LR._enclose_liepa(P, h, None, None, conforming=True)
+    assert div.n_folds == conf.n_folds == len(folds)
     for patch in (div, conf):
         X, T = patch.X, patch.T
         assert np.array_equal(X[:k], P)
@@ -83,6 +84,17 @@ def test_divided_folds_stay_edges_without_tiny_triangles(case):
         assert all(b in adj[a] for a, b in zip(chain[:-1], chain[1:], strict=True))
         # divided into pieces of about the target length
         assert len(chain) - 1 == max(1, round(L / h))
+
+
+def test_mean_value_layout_keeps_no_folds():
+    # a loop waving 2 up and down four times: its development overlaps itself, the patch is
+    # laid out by mean-value coordinates and keeps no fold (the fill's conforming retry skips it)
+    t = np.linspace(0, 2 * np.pi, 121)[:-1]
+    P = np.c_[np.cos(t), np.sin(t), 2.0 * np.cos(4 * t)]
+    h = float(np.linalg.norm(P - np.roll(P, -1, axis=0), axis=1).mean())
+    Tc = LR._orient_patch(min_weight_triangulation(P), len(P))
+    assert LR._unfold(P, Tc) is None and len(LR._creases(P, Tc, LR.LIEPA_CREASE)) > 0
+    assert LR._enclose_liepa(P, h, None, None).n_folds == 0
 
 
 def test_divided_folds_points():

@@ -220,10 +220,11 @@ def _place_patches(V: np.ndarray, F: np.ndarray, holes, skip: dict[int, str], *,
                     again = True
                     continue
                 if n_x and CONFORMING_RETRY and method[i] == "liepa" and i not in conforming \
-                        and initial == "bilaplacian":
+                        and rep.n_folds > 0 and initial == "bilaplacian":
                     # the faired Liepa patch intersects: meshed again with its folds split for
                     # the angle bound (finer along them, the fairing bends less away from the
-                    # coarse surface) before any of the fairing is given up
+                    # coarse surface) before any of the fairing is given up; a patch that kept
+                    # no folds (the mean-value layout) would come out the same
                     log.debug("hole %d (liepa): faired patch, %d face pairs; meshing it again "
                               "conforming to its folds", i, n_x)
                     conforming.add(i)

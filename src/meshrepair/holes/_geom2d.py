@@ -239,6 +239,9 @@ class Patch:
         crease curves and the edges get the MC penalty in the solve.
     n_creases : int
         Crease segments routed through the patch.
+    n_folds : int
+        ``"liepa"`` only: folds of the coarse triangulation kept as edges (0 with the mean-value
+        layout, which keeps none).
     """
 
     X: np.ndarray
@@ -248,6 +251,7 @@ class Patch:
     n_loop: int
     sharp_edges: np.ndarray = field(default_factory=lambda: np.empty((0, 2), np.int64))
     n_creases: int = 0
+    n_folds: int = 0
 
 
 def _max_area_for(h2: float) -> float:

@@ -77,6 +77,9 @@ class HoleReport:
     quality : dict
         Per-hole read-out of a filled hole (:func:`meshrepair.fill.quality.hole_quality`):
         ``seam_deg``, ``surround_deg``, ``curvature_ratio``, ``check``.
+    n_folds : int
+        Liepa patches (reason ``"liepa"``): folds of the minimum-weight triangulation kept as
+        patch edges (:mod:`meshrepair.holes.liepa_refine`; 0 with its mean-value layout).
     """
 
     index: int
@@ -93,6 +96,7 @@ class HoleReport:
                                     repr=False)
     note: str = ""
     quality: dict = field(default_factory=dict)
+    n_folds: int = field(default=0, repr=False)
 
     def add_note(self, text: str) -> None:
         """Append ``text`` to :attr:`note` (``"; "``-separated)."""

@@ -43,7 +43,7 @@ def _split_chords(patch: Patch, bad: set[tuple[int, int]]) -> Patch:
             sharp = [e for e in sharp if set(e) != {a, b}] + [(a, m), (m, b)]
     return Patch(X=X, T=T, uv=uv, method=patch.method, n_loop=patch.n_loop,
                  sharp_edges=np.asarray(sharp, np.int64).reshape(-1, 2),
-                 n_creases=patch.n_creases)
+                 n_creases=patch.n_creases, n_folds=patch.n_folds)
 
 
 def _opposite_points(V: np.ndarray, F: np.ndarray, loop: np.ndarray) -> np.ndarray:
@@ -275,6 +275,7 @@ def enclose_holes(V: np.ndarray, F: np.ndarray, holes: Sequence[Hole],
         rep.reason = patch.method
         rep.n_new_vertices = m
         rep.n_new_faces = len(Fp)
+        rep.n_folds = patch.n_folds
         if len(patch.sharp_edges):
             rep.sharp_edges = gmap[patch.sharp_edges]
             rep.n_creases = patch.n_creases

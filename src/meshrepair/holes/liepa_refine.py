@@ -414,9 +414,9 @@ def _enclose_liepa(P: np.ndarray, h: float, opposite: np.ndarray | None,
     Q = _unfold(P, Tc)
     res = None
     layout = "developed"
+    folds = _creases(P, Tc, LIEPA_CREASE)
     if Q is not None:
-        res = _refine_on_triangulation(k, P, Tc, Q, h, isometric=True,
-                                       creases=_creases(P, Tc, LIEPA_CREASE),
+        res = _refine_on_triangulation(k, P, Tc, Q, h, isometric=True, creases=folds,
                                        conforming=conforming)
     if res is None:
         S, Ts = P, Tc
@@ -434,10 +434,12 @@ def _enclose_liepa(P: np.ndarray, h: float, opposite: np.ndarray | None,
         res = _refine_on_triangulation(k, S, Ts, _mean_value_layout(S, Ts, k), h,
                                        isometric=False)
         layout = "mean-value"
+        folds = folds[:0]
     if res is None:
         raise MeshRepairError("the minimum-weight triangulation of the loop could not be remeshed "
                               "(Triangle changed the loop vertices)")
     X, T, X2 = res
     log.debug("liepa: %d-loop, %d coarse triangles, %s layout, %d triangles", k, len(Tc),
               layout, len(T))
-    return Patch(X=X, T=_orient_patch(T, k), uv=X2, method="liepa", n_loop=k)
+    return Patch(X=X, T=_orient_patch(T, k), uv=X2, method="liepa", n_loop=k,
+                 n_folds=len(folds))
