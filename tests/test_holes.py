@@ -328,7 +328,7 @@ def test_liepa_follows_the_faces_round_a_cube_corner():
     assert len(self_intersections(V2, F1, np.arange(len(Fc), len(F1)))) == 0
 
 
-def test_liepa_developed_and_mean_value_layouts():
+def test_liepa_developed_and_mean_value_layouts(monkeypatch):
     # a saddle is developed isometrically: the 2-D layout keeps the loop's edge lengths
     P = saddle_loop()
     k = len(P)
@@ -336,11 +336,19 @@ def test_liepa_developed_and_mean_value_layouts():
     el3 = np.linalg.norm(P - np.roll(P, -1, axis=0), axis=1)
     el2 = np.linalg.norm(patch.uv[:k] - np.roll(patch.uv[:k], -1, axis=0), axis=1)
     assert np.allclose(el2, el3, rtol=1e-9)
-    # a loop waving 2 up and down four times: the development overlaps itself, so the
+    # a loop waving 2 up and down four times, triangulated over all triangles (its
+    # triangulation by Delaunay facets develops): the development overlaps itself, so the
     # subdivided surface is laid out on the unit disc by mean-value coordinates
+    from functools import partial
+
+    from meshrepair.holes import liepa_refine as LR
+
+    monkeypatch.setattr(LR, "min_weight_triangulation",
+                        partial(min_weight_triangulation, search="all"))
     t = np.linspace(0, 2 * np.pi, 121)[:-1]
     P = np.c_[np.cos(t), np.sin(t), 2.0 * np.cos(4 * t)]
     k = len(P)
+    assert LR._unfold(P, LR._orient_patch(min_weight_triangulation(P), k)) is not None
     patch = enclose_loop(P, method="liepa")
     assert np.allclose(np.linalg.norm(patch.uv[:k], axis=1), 1.0)
     X, T = patch.X, patch.T

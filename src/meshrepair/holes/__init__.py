@@ -35,10 +35,12 @@ spike of the surround poking into the hole, a hole straddling a sharp crease, a 
 round a thin wall): :func:`min_weight_triangulation` (Liepa 2003, as in CGAL's
 ``triangulate_hole`` and MeshLab) triangulates the loop without new vertices, minimising the
 largest dihedral angle (against the faces on the loop edges too), then the area, by an O(k³)
-dynamic program (numba kernel, numpy twin); that coarse surface is developed isometrically into
-the plane (or, when the development overlaps itself, subdivided and laid out on the unit disc by
-mean-value coordinates), meshed by Triangle to the edge length and every new vertex placed back on
-the coarse surface, which follows the surrounding faces.
+dynamic program (numba kernel, numpy twin), or over the facets of the loop's Delaunay
+tetrahedralisation only (:mod:`.liepa_delaunay`, CGAL's search space; :func:`enclose_holes`
+refines whichever of the two crosses fewer faces of the mesh); that coarse surface is developed
+isometrically into the plane (or, when the development overlaps itself, subdivided and laid out on
+the unit disc by mean-value coordinates), meshed by Triangle to the edge length and every new
+vertex placed back on the coarse surface, which follows the surrounding faces.
 
 :func:`enclose_holes` encloses several holes of one mesh at once (appending the new vertices and
 faces), removes chords that would duplicate an existing edge, fills an annulus when a loop is an

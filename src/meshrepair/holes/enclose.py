@@ -11,7 +11,9 @@ import numpy as np
 from meshrepair.errors import MeshRepairError
 from meshrepair.holes._geom2d import Patch
 from meshrepair.holes.detect import Hole, HoleReport
+from meshrepair.holes.intersect import self_intersections
 from meshrepair.holes.islands import pair_islands
+from meshrepair.holes.liepa import min_weight_triangulation
 from meshrepair.holes.planar import ENCLOSE_METHODS, _enclose_annulus, enclose_loop
 from meshrepair.holes.refuse import _coincident_loop_vertices, _LocalFaces, _patch_problem
 
@@ -216,10 +218,13 @@ def enclose_holes(V: np.ndarray, F: np.ndarray, holes: Sequence[Hole],
             elif methods[h.index] == "liepa":
                 gverts = h.vertices
                 Fcur = np.concatenate([F, *newF]) if newF else F
+                opp = _opposite_points(V, F, h.vertices)
+                forb = _loop_chords(Fcur, h.vertices)
                 patch = enclose_loop(V[h.vertices], edge_length=h_len, method="liepa",
-                                     opposite=_opposite_points(V, F, h.vertices),
-                                     forbidden=_loop_chords(Fcur, h.vertices),
-                                     conforming=h.index in conforming)
+                                     opposite=opp, forbidden=forb,
+                                     conforming=h.index in conforming,
+                                     coarse=_liepa_coarse(h.vertices, opp, forb, fbox, newV,
+                                                          newF, nV))
             else:
                 gverts = h.vertices
                 cr = None if creases is None else creases.get(h.index)
@@ -291,6 +296,34 @@ def enclose_holes(V: np.ndarray, F: np.ndarray, holes: Sequence[Hole],
     Vout = np.concatenate([V, *newV]) if newV else V
     Fout = np.concatenate([F, *newF]) if newF else F
     return Vout, Fout, [reports[h.index] for h in holes]
+
+
+def _liepa_coarse(loop: np.ndarray, opposite: np.ndarray, forbidden: np.ndarray,
+                  fbox: _LocalFaces, newV: list, newF: list, nV: int) -> np.ndarray:
+    """Liepa's coarse triangulation of a loop of the mesh: of the minimum-weight triangulations
+    over all triangles and over the loop's Delaunay facets
+    (:func:`meshrepair.holes.min_weight_triangulation`), the one whose triangles cross fewer
+    faces of the mesh (and of the patches placed before), the first on a tie.
+
+    The weight sees only the loop and the faces on its edges: where its optimum over all
+    triangles crosses the surface further away (a long loop winding through space), the
+    Delaunay facets, which span the loop's own hull, usually do not; elsewhere the optimum
+    follows the surround at least as closely (its largest dihedral angle is the least).
+    """
+    P = fbox.V[loop]
+    cands = [min_weight_triangulation(P, opposite=opposite, forbidden=forbidden, search="all")]
+    best, best_n = cands[0], None
+    for i in range(2):
+        T = cands[i]
+        Vl, Fl, Fpl, _ = fbox.local(np.empty((0, 3)), loop[T], newV, newF, nV, pad=0.0)
+        pairs = self_intersections(Vl, np.r_[Fl, Fpl], np.arange(len(Fl), len(Fl) + len(Fpl)))
+        n = int((pairs.min(axis=1) < len(Fl)).sum()) if len(pairs) else 0
+        if best_n is None or n < best_n:
+            best, best_n = T, n
+        if n == 0 or i == 1:
+            break
+        cands.append(min_weight_triangulation(P, opposite=opposite, forbidden=forbidden))
+    return best
 
 
 def _vertex_faces(F: np.ndarray, nV: int) -> tuple[np.ndarray, np.ndarray]:

@@ -11,11 +11,13 @@ import numpy as np
 from meshrepair._kernels import HAVE_NUMBA
 from meshrepair.errors import MeshRepairError
 from meshrepair.holes._geom2d import _loop_positions
+from meshrepair.holes.liepa_delaunay import _py_delaunay_dp, delaunay_facets
 
 if HAVE_NUMBA:
     from meshrepair._kernels import (
         njit,  # numba.njit, without the disk cache where none is writable
     )
+    from meshrepair.holes.liepa_delaunay import _nb_delaunay_dp
 
 log = logging.getLogger(__name__)
 
@@ -23,6 +25,11 @@ log = logging.getLogger(__name__)
 LIEPA_MAX_LOOP = 1000
 """Largest loop (boundary vertices) :func:`meshrepair.fill.fill_holes` encloses with the O(k³)
 dynamic program of :func:`min_weight_triangulation` (about 2 s and 90 MB at this size)."""
+
+SEARCH_SPACES = ("delaunay", "all")
+"""Search spaces of :func:`min_weight_triangulation`: the facets of the loop's Delaunay
+tetrahedralisation (:mod:`meshrepair.holes.liepa_delaunay`), falling back to all triangles when
+they hold no triangulation of the loop, or all triangles."""
 
 _DP_TOL = 1e-12
 """Bends ``1 - cos(dihedral angle)`` closer than this count as equal in the lexicographic
@@ -233,7 +240,8 @@ def _edge_normals(P: np.ndarray, opposite: np.ndarray | None) -> tuple[np.ndarra
 
 
 def min_weight_triangulation(P: np.ndarray, *, opposite: np.ndarray | None = None,
-                             forbidden: np.ndarray | None = None) -> np.ndarray:
+                             forbidden: np.ndarray | None = None,
+                             search: str = "delaunay") -> np.ndarray:
     """Liepa's minimum-weight triangulation of a closed 3-D polygon (no new vertices).
 
     Dynamic program over the sub-polygons ``i, i+1, ..., j`` (O(k³) time, O(k²) memory; a numba
@@ -242,7 +250,11 @@ def min_weight_triangulation(P: np.ndarray, *, opposite: np.ndarray | None = Non
     dihedral angle between adjacent triangles, including the existing face on each loop edge
     (``opposite``), then the total area (Liepa 2003, "Filling holes in meshes"; the weight of
     CGAL's ``triangulate_hole``). It therefore follows the surrounding faces instead of a
-    projection plane.
+    projection plane. As in CGAL, the search first runs over the facets of the Delaunay
+    tetrahedralisation of the loop vertices (:mod:`meshrepair.holes.liepa_delaunay`: O(k)
+    triangles for a loop, and a triangulation by them rarely crosses the surrounding surface,
+    which the unrestricted optimum of a long loop winding through space can), and over every
+    triangle when those hold no triangulation of the loop.
 
     Parameters
     ----------
@@ -254,6 +266,9 @@ def min_weight_triangulation(P: np.ndarray, *, opposite: np.ndarray | None = Non
     forbidden : (q, 2) int, optional
         Local index pairs that must not become chords (they are edges of the mesh already and
         would get a third face). Ignored when no triangulation avoids them all.
+    search : ``"delaunay"`` or ``"all"``
+        The search space (:data:`SEARCH_SPACES`): the Delaunay facets first (falling back to all
+        triangles), or all triangles at once.
 
     Returns
     -------
@@ -264,7 +279,7 @@ def min_weight_triangulation(P: np.ndarray, *, opposite: np.ndarray | None = Non
     Raises
     ------
     MeshRepairError
-        For a loop of fewer than 3 vertices or non-finite positions.
+        For a loop of fewer than 3 vertices or non-finite positions, or an unknown ``search``.
     """
     P = _loop_positions(P)
     k = len(P)
@@ -277,8 +292,21 @@ def min_weight_triangulation(P: np.ndarray, *, opposite: np.ndarray | None = Non
         lo, hi = fb.min(axis=1), fb.max(axis=1)
         chord = (hi - lo >= 2) & ~((lo == 0) & (hi == k - 1))
         forbid[lo[chord], hi[chord]] = True
+    if search not in SEARCH_SPACES:
+        raise MeshRepairError(f"search must be one of {SEARCH_SPACES}, got {search!r}")
+    opt = bend = None
+    if search == "delaunay":
+        tri = delaunay_facets(P)
+        if tri is not None:
+            ddp = _nb_delaunay_dp if HAVE_NUMBA else _py_delaunay_dp
+            opt, bend, _ = ddp(P, N0, has0, forbid, tri[:, 0].copy(), tri[:, 1].copy(),
+                               tri[:, 2].copy(), _DP_TOL)
+        if bend is None or not np.isfinite(bend[0, k - 1]):
+            log.debug("no triangulation of the %d-loop by Delaunay facets; searching all", k)
+            opt = bend = None
     dp = _nb_liepa_dp if HAVE_NUMBA else _np_liepa_dp
-    opt, bend, _ = dp(P, N0, has0, forbid, _DP_TOL)
+    if bend is None:
+        opt, bend, _ = dp(P, N0, has0, forbid, _DP_TOL)
     if not np.isfinite(bend[0, k - 1]):
         log.info("no triangulation of the %d-loop avoids the existing edges; allowing them", k)
         opt, bend, _ = dp(P, N0, has0, np.zeros((k, k), bool), _DP_TOL)

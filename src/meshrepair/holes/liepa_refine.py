@@ -392,10 +392,12 @@ def _creases(P: np.ndarray, T: np.ndarray, min_deg: float) -> np.ndarray:
 
 
 def _enclose_liepa(P: np.ndarray, h: float, opposite: np.ndarray | None,
-                   forbidden: np.ndarray | None, *, conforming: bool = False) -> Patch:
+                   forbidden: np.ndarray | None, *, conforming: bool = False,
+                   coarse: np.ndarray | None = None) -> Patch:
     """Liepa's triangulation of the loop, remeshed to edge length ``h`` on its own surface.
 
-    1. :func:`min_weight_triangulation` (no interior vertices).
+    1. :func:`min_weight_triangulation` (no interior vertices), or the caller's ``coarse``
+       triangulation of the loop.
     2. A planar layout of it: the isometric development along its dual tree (:func:`_unfold`)
        when that does not overlap itself (no distortion at all); otherwise the coarse surface is
        subdivided 1-to-4 until its edges are at most ``2 h`` and laid out by Floater's
@@ -409,7 +411,13 @@ def _enclose_liepa(P: np.ndarray, h: float, opposite: np.ndarray | None,
        surface up to the smaller folds, with the mean-value layout its vertices do.
     """
     k = len(P)
-    Tc = min_weight_triangulation(P, opposite=opposite, forbidden=forbidden)
+    if coarse is None:
+        Tc = min_weight_triangulation(P, opposite=opposite, forbidden=forbidden)
+    else:
+        Tc = np.asarray(coarse, dtype=np.int64).reshape(-1, 3)
+        if Tc.shape != (k - 2, 3) or Tc.min(initial=0) < 0 or Tc.max(initial=0) >= k:
+            raise MeshRepairError(f"coarse must be a ({k - 2}, 3) triangulation of the {k}-loop "
+                                  f"in local indices, got shape {Tc.shape}")
     Tc = _orient_patch(Tc, k)  # already backwards along the loop; checks it
     Q = _unfold(P, Tc)
     res = None

@@ -35,7 +35,7 @@ ENCLOSE_METHODS = ("auto", "liepa")
 def enclose_loop(P: np.ndarray, *, edge_length: float | None = None, method: str = "auto",
                  opposite: np.ndarray | None = None,
                  forbidden: np.ndarray | None = None, creases=None,
-                 conforming: bool = False) -> Patch:
+                 conforming: bool = False, coarse: np.ndarray | None = None) -> Patch:
     """Triangulate the hole bounded by the closed 3-D polygon ``P``.
 
     Parameters
@@ -59,6 +59,10 @@ def enclose_loop(P: np.ndarray, *, edge_length: float | None = None, method: str
         ``"liepa"`` only: let Triangle split the folds of the coarse triangulation for its angle
         bound (a patch much finer along them) instead of dividing them into pieces of the edge
         length first (see :func:`_refine_on_triangulation`).
+    coarse : (k - 2, 3) int, optional
+        ``"liepa"`` only: the triangulation of the loop to refine, in local indices as
+        :func:`min_weight_triangulation` returns it (default: that function's, from ``opposite``
+        and ``forbidden``).
     creases : CreaseRoute, optional
         ``"auto"`` only: crease segments to route through the patch as constrained edges of the
         planar triangulation (:mod:`.creases`); their vertices are placed on the crease curves
@@ -96,7 +100,7 @@ def enclose_loop(P: np.ndarray, *, edge_length: float | None = None, method: str
     if method == "liepa":
         from meshrepair.holes.liepa_refine import _enclose_liepa
 
-        return _enclose_liepa(P, h, opposite, forbidden, conforming=conforming)
+        return _enclose_liepa(P, h, opposite, forbidden, conforming=conforming, coarse=coarse)
     segs = np.c_[np.arange(k), (np.arange(k) + 1) % k]
     c = P.mean(axis=0)
     candidates: list[tuple[str, np.ndarray]] = []
