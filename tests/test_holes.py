@@ -623,3 +623,23 @@ def test_self_intersections_candidates_complete_with_mixed_face_sizes():
     assert want and got == want
     sub = {tuple(p) for p in self_intersections(V, F, faces=[0, 1, 2]).tolist()}
     assert sub == {p for p in want if p[0] in (0, 1, 2) or p[1] in (0, 1, 2)}
+
+
+def test_self_intersections_in_blocks_equal_one_block(monkeypatch):
+    """Query faces and candidate pairs processed in small blocks give the pairs of one block
+    (pairs between two query faces found once, across blocks too)."""
+    from meshrepair.holes import intersect as HI
+
+    rng = np.random.default_rng(11)
+    n = 200
+    centers = rng.random((n, 3))
+    V = (centers[:, None, :] + 0.08 * rng.normal(size=(n, 3, 3))).reshape(-1, 3)
+    F = np.arange(3 * n).reshape(n, 3)
+    q = rng.choice(n, 60, replace=False)
+    whole = self_intersections(V, F), self_intersections(V, F, faces=q)
+    assert len(whole[0]) > 30 and len(whole[1]) > 10
+    for qb, pb in ((1, 1), (7, 5), (33, 1000)):
+        monkeypatch.setattr(HI, "QUERY_BLOCK", qb)
+        monkeypatch.setattr(HI, "PAIR_BLOCK", pb)
+        assert np.array_equal(self_intersections(V, F), whole[0])
+        assert np.array_equal(self_intersections(V, F, faces=q), whole[1])

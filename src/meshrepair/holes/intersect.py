@@ -26,6 +26,57 @@ def _seg_tri(p: np.ndarray, q: np.ndarray, a: np.ndarray, b: np.ndarray, c: np.n
     return ok & (u >= -tol) & (v >= -tol) & (u + v <= 1 + tol) & (t >= -tol) & (t <= 1 + tol)
 
 
+PAIR_BLOCK = 100_000
+"""Candidate face pairs tested at once by :func:`self_intersections` (the tests hold about 1 kB
+of temporaries per pair: blocks bound the memory whatever the number of candidates)."""
+
+QUERY_BLOCK = 20_000
+"""Query faces whose candidate pairs :func:`self_intersections` gathers at once."""
+
+
+def _pair_hits(V: np.ndarray, F: np.ndarray, a: np.ndarray, b: np.ndarray,
+               tol: float) -> np.ndarray:
+    """Row-wise: do faces ``F[a]`` and ``F[b]`` intersect other than along their shared vertices
+    or edge (the tests of :func:`self_intersections`)."""
+    Fa, Fb = F[a], F[b]
+    shared = (Fa[:, :, None] == Fb[:, None, :])
+    n_sh = shared.any(axis=2).sum(axis=1)
+    hit = np.zeros(len(a), bool)
+    # no shared vertex: 6 segment-triangle tests
+    m0 = np.flatnonzero(n_sh == 0)
+    if len(m0):
+        A, B = V[Fa[m0]], V[Fb[m0]]
+        h0 = np.zeros(len(m0), bool)
+        for k in range(3):
+            h0 |= _seg_tri(A[:, k], A[:, (k + 1) % 3], B[:, 0], B[:, 1], B[:, 2], tol)
+            h0 |= _seg_tri(B[:, k], B[:, (k + 1) % 3], A[:, 0], A[:, 1], A[:, 2], tol)
+        hit[m0] = h0
+    # one shared vertex: the opposite edges
+    m1 = np.flatnonzero(n_sh == 1)
+    if len(m1):
+        sa = shared[m1].any(axis=2)  # which corner of a is shared
+        sb = shared[m1].any(axis=1)
+        ka = np.argmax(sa, axis=1)
+        kb = np.argmax(sb, axis=1)
+        r = np.arange(len(m1))
+        A, B = V[Fa[m1]], V[Fb[m1]]
+        pa, qa = A[r, (ka + 1) % 3], A[r, (ka + 2) % 3]
+        pb, qb = B[r, (kb + 1) % 3], B[r, (kb + 2) % 3]
+        # strict parameters so the shared vertex itself does not count
+        h1 = _seg_tri(pa, qa, B[:, 0], B[:, 1], B[:, 2], -tol)
+        h1 |= _seg_tri(pb, qb, A[:, 0], A[:, 1], A[:, 2], -tol)
+        hit[m1] = h1
+    # shared edge: folded faces
+    m2 = np.flatnonzero(n_sh == 2)
+    if len(m2):
+        na = np.cross(V[Fa[m2, 1]] - V[Fa[m2, 0]], V[Fa[m2, 2]] - V[Fa[m2, 0]])
+        nb = np.cross(V[Fb[m2, 1]] - V[Fb[m2, 0]], V[Fb[m2, 2]] - V[Fb[m2, 0]])
+        cosang = np.einsum("ij,ij->i", na, nb) / np.maximum(
+            np.linalg.norm(na, axis=1) * np.linalg.norm(nb, axis=1), 1e-300)
+        hit[m2] = cosang < -np.cos(np.radians(0.1))
+    return hit
+
+
 def self_intersections(V: np.ndarray, F: np.ndarray, faces: np.ndarray | None = None, *,
                        tol: float = 1e-9) -> np.ndarray:
     """Pairs of faces that intersect other than along their shared vertices or edge.
@@ -65,65 +116,34 @@ def self_intersections(V: np.ndarray, F: np.ndarray, faces: np.ndarray | None = 
     med = max(float(np.median(rad)), 1e-300)
     cls = np.floor(np.log2(np.maximum(rad, 1e-300) / med)).astype(np.int64)
     cls = np.clip(cls, -8, None)
-    a_parts, b_parts = [], []
-    for c in np.unique(cls):
-        members = np.flatnonzero(cls == c)
-        tree = cKDTree(cen[members])
-        lists = tree.query_ball_point(cen[q_faces], r=rad[q_faces] + float(rad[members].max()))
-        counts = np.fromiter((len(x) for x in lists), dtype=np.int64, count=len(lists))
-        if counts.sum() == 0:
-            continue
-        a_parts.append(np.repeat(q_faces, counts))
-        b_parts.append(members[np.fromiter(itertools.chain.from_iterable(lists), dtype=np.int64,
-                                           count=int(counts.sum()))])
-    if not a_parts:
-        return np.empty((0, 2), np.int64)
-    a = np.concatenate(a_parts)
-    b = np.concatenate(b_parts)
-    # each (query face, face) pair is found once; a pair of two query faces twice: keep a < b
     qset = np.zeros(len(F), bool)
     qset[q_faces] = True
-    keep = (a != b) & (~qset[b] | (a < b))
-    a, b = np.minimum(a[keep], b[keep]), np.maximum(a[keep], b[keep])
-    if len(a) == 0:
+    classes = [(np.flatnonzero(cls == c)) for c in np.unique(cls)]
+    trees = [(members, cKDTree(cen[members]), float(rad[members].max())) for members in classes]
+    found = []
+    # query faces in blocks, so the candidate pairs of one block (lists, tests) bound the memory
+    for q0 in range(0, len(q_faces), QUERY_BLOCK):
+        qb = q_faces[q0:q0 + QUERY_BLOCK]
+        for members, tree, rmax in trees:
+            lists = tree.query_ball_point(cen[qb], r=rad[qb] + rmax)
+            counts = np.fromiter((len(x) for x in lists), dtype=np.int64, count=len(lists))
+            if counts.sum() == 0:
+                continue
+            a = np.repeat(qb, counts)
+            b = members[np.fromiter(itertools.chain.from_iterable(lists), dtype=np.int64,
+                                    count=int(counts.sum()))]
+            del lists
+            # each (query face, face) pair is found once; a pair of two query faces twice
+            keep = (a != b) & (~qset[b] | (a < b))
+            a, b = np.minimum(a[keep], b[keep]), np.maximum(a[keep], b[keep])
+            close = np.linalg.norm(cen[a] - cen[b], axis=1) <= rad[a] + rad[b]
+            a, b = a[close], b[close]
+            for s0 in range(0, len(a), PAIR_BLOCK):
+                s1 = min(s0 + PAIR_BLOCK, len(a))
+                hit = _pair_hits(V, F, a[s0:s1], b[s0:s1], tol)
+                if hit.any():
+                    found.append(np.c_[a[s0:s1][hit], b[s0:s1][hit]])
+    if not found:
         return np.empty((0, 2), np.int64)
-    close = np.linalg.norm(cen[a] - cen[b], axis=1) <= rad[a] + rad[b]
-    a, b = a[close], b[close]
-    Fa, Fb = F[a], F[b]
-    shared = (Fa[:, :, None] == Fb[:, None, :])
-    n_sh = shared.any(axis=2).sum(axis=1)
-    hit = np.zeros(len(a), bool)
-    # no shared vertex: 6 segment-triangle tests
-    m0 = np.flatnonzero(n_sh == 0)
-    if len(m0):
-        A, B = V[Fa[m0]], V[Fb[m0]]
-        h0 = np.zeros(len(m0), bool)
-        for k in range(3):
-            h0 |= _seg_tri(A[:, k], A[:, (k + 1) % 3], B[:, 0], B[:, 1], B[:, 2], tol)
-            h0 |= _seg_tri(B[:, k], B[:, (k + 1) % 3], A[:, 0], A[:, 1], A[:, 2], tol)
-        hit[m0] = h0
-    # one shared vertex: the opposite edges
-    m1 = np.flatnonzero(n_sh == 1)
-    if len(m1):
-        sa = shared[m1].any(axis=2)  # which corner of a is shared
-        sb = shared[m1].any(axis=1)
-        ka = np.argmax(sa, axis=1)
-        kb = np.argmax(sb, axis=1)
-        r = np.arange(len(m1))
-        A, B = V[Fa[m1]], V[Fb[m1]]
-        pa, qa = A[r, (ka + 1) % 3], A[r, (ka + 2) % 3]
-        pb, qb = B[r, (kb + 1) % 3], B[r, (kb + 2) % 3]
-        # strict parameters so the shared vertex itself does not count
-        h1 = _seg_tri(pa, qa, B[:, 0], B[:, 1], B[:, 2], -tol)
-        h1 |= _seg_tri(pb, qb, A[:, 0], A[:, 1], A[:, 2], -tol)
-        hit[m1] = h1
-    # shared edge: folded faces
-    m2 = np.flatnonzero(n_sh == 2)
-    if len(m2):
-        na = np.cross(V[Fa[m2, 1]] - V[Fa[m2, 0]], V[Fa[m2, 2]] - V[Fa[m2, 0]])
-        nb = np.cross(V[Fb[m2, 1]] - V[Fb[m2, 0]], V[Fb[m2, 2]] - V[Fb[m2, 0]])
-        cosang = np.einsum("ij,ij->i", na, nb) / np.maximum(
-            np.linalg.norm(na, axis=1) * np.linalg.norm(nb, axis=1), 1e-300)
-        hit[m2] = cosang < -np.cos(np.radians(0.1))
-    pairs = np.c_[a[hit], b[hit]].astype(np.int64)
+    pairs = np.concatenate(found).astype(np.int64)
     return pairs[np.lexsort((pairs[:, 1], pairs[:, 0]))]
