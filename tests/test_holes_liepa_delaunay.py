@@ -210,3 +210,18 @@ def test_enclose_keeps_the_full_optimum_where_it_crosses_nothing():
         assert np.array_equal(T, full) or np.array_equal(T, dela)
         n_full += np.array_equal(T, full) and not np.array_equal(full, dela)
     assert n_full >= 1  # a loop whose two optima differ keeps the full one (it crosses nothing)
+
+
+def test_enclose_loop_refines_the_given_coarse_triangulation():
+    from meshrepair.holes import enclose_loop
+
+    P, O = _wavy_loop(30, 3)
+    full = min_weight_triangulation(P, opposite=O, search="all")
+    dela = min_weight_triangulation(P, opposite=O)
+    a = enclose_loop(P, method="liepa", opposite=O, coarse=full)
+    b = enclose_loop(P, method="liepa", opposite=O)
+    assert np.array_equal(b.X, enclose_loop(P, method="liepa", opposite=O, coarse=dela).X)
+    if not np.array_equal(np.sort(full, axis=1), np.sort(dela, axis=1)):
+        assert not np.array_equal(a.X, b.X) or not np.array_equal(a.T, b.T)
+    with pytest.raises(MeshRepairError, match="coarse must be a"):
+        enclose_loop(P, method="liepa", coarse=full[:-1])
