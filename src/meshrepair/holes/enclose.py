@@ -13,7 +13,7 @@ from meshrepair.holes._geom2d import Patch
 from meshrepair.holes.detect import Hole, HoleReport
 from meshrepair.holes.intersect import self_intersections
 from meshrepair.holes.islands import pair_islands
-from meshrepair.holes.liepa import min_weight_triangulation
+from meshrepair.holes.liepa import delaunay_optimum, min_weight_triangulation
 from meshrepair.holes.planar import ENCLOSE_METHODS, _enclose_annulus, enclose_loop
 from meshrepair.holes.refuse import _coincident_loop_vertices, _LocalFaces, _patch_problem
 
@@ -311,19 +311,18 @@ def _liepa_coarse(loop: np.ndarray, opposite: np.ndarray, forbidden: np.ndarray,
     follows the surround at least as closely (its largest dihedral angle is the least).
     """
     P = fbox.V[loop]
-    cands = [min_weight_triangulation(P, opposite=opposite, forbidden=forbidden, search="all")]
-    best, best_n = cands[0], None
-    for i in range(2):
-        T = cands[i]
+
+    def crossings(T: np.ndarray) -> int:
         Vl, Fl, Fpl, _ = fbox.local(np.empty((0, 3)), loop[T], newV, newF, nV, pad=0.0)
         pairs = self_intersections(Vl, np.r_[Fl, Fpl], np.arange(len(Fl), len(Fl) + len(Fpl)))
-        n = int((pairs.min(axis=1) < len(Fl)).sum()) if len(pairs) else 0
-        if best_n is None or n < best_n:
-            best, best_n = T, n
-        if n == 0 or i == 1:
-            break
-        cands.append(min_weight_triangulation(P, opposite=opposite, forbidden=forbidden))
-    return best
+        return int((pairs.min(axis=1) < len(Fl)).sum()) if len(pairs) else 0
+
+    full = min_weight_triangulation(P, opposite=opposite, forbidden=forbidden, search="all")
+    n_full = crossings(full)
+    if n_full == 0:
+        return full
+    dela = delaunay_optimum(P, opposite=opposite, forbidden=forbidden)
+    return dela if dela is not None and crossings(dela) < n_full else full
 
 
 def _vertex_faces(F: np.ndarray, nV: int) -> tuple[np.ndarray, np.ndarray]:

@@ -281,6 +281,26 @@ def min_weight_triangulation(P: np.ndarray, *, opposite: np.ndarray | None = Non
     MeshRepairError
         For a loop of fewer than 3 vertices or non-finite positions, or an unknown ``search``.
     """
+    if search not in SEARCH_SPACES:
+        raise MeshRepairError(f"search must be one of {SEARCH_SPACES}, got {search!r}")
+    P, N0, has0, forbid = _program_inputs(P, opposite, forbidden)
+    k = len(P)
+    if search == "delaunay":
+        T = _delaunay_optimum(P, N0, has0, forbid)
+        if T is not None:
+            return T
+        log.debug("no triangulation of the %d-loop by Delaunay facets; searching all", k)
+    dp = _nb_liepa_dp if HAVE_NUMBA else _np_liepa_dp
+    opt, bend, _ = dp(P, N0, has0, forbid, _DP_TOL)
+    if not np.isfinite(bend[0, k - 1]):
+        log.info("no triangulation of the %d-loop avoids the existing edges; allowing them", k)
+        opt, bend, _ = dp(P, N0, has0, np.zeros((k, k), bool), _DP_TOL)
+    return _triangles(opt, k)
+
+
+def _program_inputs(P, opposite, forbidden):
+    """The loop positions checked, the normals of the faces on the loop edges and which exist,
+    and the ``(k, k)`` matrix of forbidden chords, for the dynamic programs."""
     P = _loop_positions(P)
     k = len(P)
     N0, has0 = _edge_normals(P, opposite)
@@ -292,24 +312,32 @@ def min_weight_triangulation(P: np.ndarray, *, opposite: np.ndarray | None = Non
         lo, hi = fb.min(axis=1), fb.max(axis=1)
         chord = (hi - lo >= 2) & ~((lo == 0) & (hi == k - 1))
         forbid[lo[chord], hi[chord]] = True
-    if search not in SEARCH_SPACES:
-        raise MeshRepairError(f"search must be one of {SEARCH_SPACES}, got {search!r}")
-    opt = bend = None
-    if search == "delaunay":
-        tri = delaunay_facets(P)
-        if tri is not None:
-            ddp = _nb_delaunay_dp if HAVE_NUMBA else _py_delaunay_dp
-            opt, bend, _ = ddp(P, N0, has0, forbid, tri[:, 0].copy(), tri[:, 1].copy(),
-                               tri[:, 2].copy(), _DP_TOL)
-        if bend is None or not np.isfinite(bend[0, k - 1]):
-            log.debug("no triangulation of the %d-loop by Delaunay facets; searching all", k)
-            opt = bend = None
-    dp = _nb_liepa_dp if HAVE_NUMBA else _np_liepa_dp
-    if bend is None:
-        opt, bend, _ = dp(P, N0, has0, forbid, _DP_TOL)
-    if not np.isfinite(bend[0, k - 1]):
-        log.info("no triangulation of the %d-loop avoids the existing edges; allowing them", k)
-        opt, bend, _ = dp(P, N0, has0, np.zeros((k, k), bool), _DP_TOL)
+    return P, N0, has0, forbid
+
+
+def _delaunay_optimum(P, N0, has0, forbid) -> np.ndarray | None:
+    """The minimum-weight triangulation by the loop's Delaunay facets avoiding the forbidden
+    chords (:mod:`meshrepair.holes.liepa_delaunay`), or None where there is none."""
+    k = len(P)
+    tri = delaunay_facets(P)
+    if tri is None:
+        return None
+    ddp = _nb_delaunay_dp if HAVE_NUMBA else _py_delaunay_dp
+    opt, bend, _ = ddp(P, N0, has0, forbid, tri[:, 0].copy(), tri[:, 1].copy(), tri[:, 2].copy(),
+                       _DP_TOL)
+    return _triangles(opt, k) if np.isfinite(bend[0, k - 1]) else None
+
+
+def delaunay_optimum(P: np.ndarray, *, opposite: np.ndarray | None = None,
+                     forbidden: np.ndarray | None = None) -> np.ndarray | None:
+    """:func:`min_weight_triangulation` over the loop's Delaunay facets only, avoiding the
+    ``forbidden`` chords: the ``(k - 2, 3)`` triangles, or None where the facets hold no such
+    triangulation (no fallback to the full search)."""
+    return _delaunay_optimum(*_program_inputs(P, opposite, forbidden))
+
+
+def _triangles(opt: np.ndarray, k: int) -> np.ndarray:
+    """The triangles ``(i, j, m)`` of the best apices ``opt`` of the whole loop ``[0, k-1]``."""
     T = []
     stack = [(0, k - 1)]
     while stack:
