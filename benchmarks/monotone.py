@@ -16,6 +16,14 @@ can decide the whole MSAE.
     python benchmarks/monotone.py                       # every mesh < 60k vertices, 4 levels
     python benchmarks/monotone.py --meshes bunny spot --levels 0.05 0.1 0.2 --json out.json
     python benchmarks/monotone.py --correlated 4 --levels 0.1 0.3 0.5   # correlated, ℓ ≈ 2 edges
+
+``--peers`` adds the best of more oracle-tuned filters on each row: the in-house bilateral
+normal filter and MeshLib's ``meshDenoiseViaNormals`` (when installed) over the grids of
+``benchmarks/compare.py``, with Taubin's grid above; the row's ``best filter`` column is the
+lowest MSAE of the three (each filter's grid point chosen with the truth) and the summary gives
+the median ratio of the defaults to it, the rows above it and the rows above twice it:
+
+    python benchmarks/monotone.py --levels 0.1 0.2 0.3 --peers
 """
 
 from __future__ import annotations
@@ -49,6 +57,27 @@ def tuned_taubin(Vn, F, Vt, faces=None):
     return best
 
 
+def oracle_peers(Vn, F, Vt, methods):
+    """``(MSAE, label)`` of the best run over the grids of ``methods`` (compare.py ``Method``s)
+    on the noisy ``Vn`` against the truth ``Vt``; runs that fail or change the connectivity are
+    left out."""
+    from meshrepair.metrics import msae
+
+    best = (float("inf"), "-")
+    for m in methods:
+        for kw in m.grid:
+            try:
+                X, Fo = m.run(Vn, F, **kw)
+            except Exception:  # noqa: BLE001  (a filter that fails on a grid point)
+                continue
+            if len(X) != len(Vn) or not np.array_equal(Fo, F) or not np.isfinite(X).all():
+                continue
+            v = msae(X, Vt, F)
+            if v < best[0]:
+                best = (v, m.short)
+    return best
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--meshes", nargs="*", default=MESHES)
@@ -62,14 +91,28 @@ def main(argv=None) -> int:
     ap.add_argument("--sliver-angle", type=float, default=5.0,
                     help="faces of the truth with a smaller interior angle (degrees) are left out "
                          "of the last two columns (default 5)")
+    ap.add_argument("--peers", action="store_true",
+                    help="also the best oracle-tuned bilateral normal filter and MeshLib "
+                         "meshDenoiseViaNormals (grids of compare.py) on each row")
     args = ap.parse_args(argv)
     C.limit_threads(1)
     import meshrepair as mr
 
+    peers = []
+    if args.peers:
+        import compare
+
+        notes: list[str] = []
+        peers = [m for m in compare.inhouse_methods() + compare.meshlib_methods(notes)
+                 if m.name in ("bilateral_normal_filter", "meshDenoiseViaNormals")]
+        for n in notes:
+            print(n)
+
     rows = []
     print("| mesh | γ | input MSAE | defaults MSAE | tuned Taubin MSAE (pairs) | ratio | flags | "
-          "slivers | defaults / Taubin without them |")
-    print("|---|---:|---:|---:|---:|---:|---|---:|---|")
+          "slivers | defaults / Taubin without them |"
+          + (" best filter MSAE | ratio |" if peers else ""))
+    print("|---|---:|---:|---:|---:|---:|---|---:|---|" + ("---:|---:|" if peers else ""))
     for name in args.meshes:
         Vt, F, _ = C.read(name)
         shaped = mr.min_face_angles(Vt, F) >= args.sliver_angle
@@ -96,7 +139,10 @@ def main(argv=None) -> int:
             if m > m_in:
                 flags.append("> input")
             prev = m
+            bp = oracle_peers(Vn, F, Vt, peers) if peers else (float("inf"), "-")
+            best, who = (mt, "Taubin") if mt <= bp[0] else bp
             rows.append({"mesh": name, "gamma": g, "direction": args.direction,
+                         "best_filter": best, "best_filter_name": who,
                          "correlated": args.correlated, "msae": m, "msae_input": m_in,
                          "taubin": mt, "taubin_pairs": kt, "seconds": dt,
                          "slivers": int((~shaped).sum()), "msae_shaped": ms,
@@ -104,8 +150,9 @@ def main(argv=None) -> int:
                          "willmore_weight": r.params.get("willmore_weight"),
                          "presmooth_steps": r.params.get("presmooth_steps"),
                          "flags": flags})
+            extra = f" {best:.2f} ({who}) | {m / best:.2f} |" if peers else ""
             print(f"| {name} | {g:g} | {m_in:.2f} | {m:.2f} | {mt:.2f} ({kt}) | {m / mt:.2f} | "
-                  f"{', '.join(flags)} | {int((~shaped).sum())} | {ms:.2f} / {mts:.2f} |",
+                  f"{', '.join(flags)} | {int((~shaped).sum())} | {ms:.2f} / {mts:.2f} |{extra}",
                   flush=True)
     ratios = np.array([r["msae"] / r["taubin"] for r in rows])
     nm = sum("NOT MONOTONE" in r["flags"] for r in rows)
@@ -116,6 +163,14 @@ def main(argv=None) -> int:
     rs = np.array([r["msae_shaped"] / r["taubin_shaped"] for r in rows])
     print(f"without slivers (< {args.sliver_angle:g}°): median ratio {np.median(rs):.2f}; worse "
           f"than Taubin in {int((rs > 1).sum())} of {len(rows)}")
+    if peers:
+        rb = np.array([r["msae"] / r["best_filter"] for r in rows])
+        worse = [f"{r['mesh']} {r['gamma']:g} ({x:.2f}, {r['best_filter_name']})"
+                 for r, x in zip(rows, rb, strict=True) if x > 1]
+        print(f"against the best oracle-tuned filter (Taubin, bilateral, MeshLib): median ratio "
+              f"{np.median(rb):.2f}, largest {rb.max():.2f}; above it in {len(worse)} of "
+              f"{len(rows)}{': ' + ', '.join(worse) if worse else ''}; above twice it in "
+              f"{int((rb > 2).sum())}")
     if args.json:
         Path(args.json).write_text(json.dumps(rows, indent=1))
     return 0
