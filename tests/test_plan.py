@@ -116,6 +116,49 @@ def test_presmooth_can_be_switched_off_in_the_plan(heavy_spot):
     assert r.params["presmooth_steps"] == 0 and np.isfinite(r.V).all()
 
 
+def test_an_edit_the_run_would_not_use_is_refused(heavy_spot):
+    """A low-passing plan runs ``inner``: its own fields are those of a run on the raw input.
+    An edit of them would change nothing, so it is refused with the ways to say what is meant,
+    and both ways run with the edit."""
+    V, F = heavy_spot
+    p = mr.plan_denoise(V, F)
+    assert p.presmooth_steps > 0 and p.inner.if_correlated is None
+    assert p.polish and not p.inner.polish  # (an edit to the value inner holds is carried)
+    for edit in ({"lam": 2 * p.lam}, {"stages": p.stages[:1]}, {"outside_weight": 3.0}):
+        with pytest.raises(MeshRepairError, match=rf"inner.*\({next(iter(edit))}\)"):
+            mr.denoise(V, F, plan=dataclasses.replace(p, **edit))
+    r0 = mr.denoise(V, F, plan=p)
+    ri = mr.denoise(V, F, plan=dataclasses.replace(
+        p, inner=dataclasses.replace(p.inner, lam=2 * p.inner.lam)))
+    assert ri.plan.inner.lam == 2 * p.inner.lam and not np.array_equal(ri.V, r0.V)
+    both = dataclasses.replace(p, lam=2 * p.lam,  # edited in both: the edit of inner runs
+                               inner=dataclasses.replace(p.inner, lam=2 * p.inner.lam))
+    np.testing.assert_array_equal(mr.denoise(V, F, plan=both).V, ri.V)
+    rr = mr.denoise(V, F, plan=dataclasses.replace(p, presmooth_steps=0, lam=2 * p.lam))
+    assert rr.params["presmooth_steps"] == 0 and rr.params["lam"] == pytest.approx(2 * p.lam)
+    with pytest.raises(MeshRepairError, match=r"`inner` was edited \(lam\)"):
+        mr.denoise(V, F, plan=dataclasses.replace(
+            p, presmooth_steps=0, inner=dataclasses.replace(p.inner, lam=2 * p.inner.lam)))
+    # an edit back to the planned value is no edit
+    assert np.array_equal(mr.denoise(V, F, plan=dataclasses.replace(p, lam=p.lam)).V, r0.V)
+
+
+def test_an_edit_the_correlated_alternative_lacks_is_refused():
+    """A plan with ``if_correlated`` may run that plan instead: an edit it does not carry is
+    refused; edited in both, or without the alternative, the run takes it."""
+    V, F = bundled_mesh("trim_star.ply")
+    Y = mr.add_noise(V, F, 0.1, direction="normal", seed=1)
+    p = mr.plan_denoise(Y, F)
+    assert p.if_correlated is not None and p.presmooth_steps == 0
+    with pytest.raises(MeshRepairError, match=r"if_correlated.*\(lam\)"):
+        mr.denoise(Y, F, plan=dataclasses.replace(p, lam=2 * p.lam))
+    both = dataclasses.replace(p, lam=2 * p.lam,
+                               if_correlated=dataclasses.replace(p.if_correlated, lam=2 * p.lam))
+    assert mr.denoise(Y, F, plan=both).params["lam"] == pytest.approx(2 * p.lam)
+    alone = dataclasses.replace(p, lam=2 * p.lam, if_correlated=None)
+    assert mr.denoise(Y, F, plan=alone).params["lam"] == pytest.approx(2 * p.lam)
+
+
 def test_cli_explain_prints_the_plan_and_writes_nothing(tmp_path, capsys, monkeypatch):
     from meshrepair.cli import main
 

@@ -19,7 +19,7 @@ from meshrepair.denoise import crease_network as _cn
 from meshrepair.denoise import scalefree as _sf
 from meshrepair.denoise.checks import _checked
 from meshrepair.denoise.folds import fidelity_data, unfolded_data_after_probe
-from meshrepair.denoise.plan import Decision, DenoisePlan, _State, mesh_key
+from meshrepair.denoise.plan import Decision, DenoisePlan, _State, mesh_key, planned_values
 from meshrepair.denoise.regions import flat_edges
 from meshrepair.denoise.rules import (
     CAD_SUPPORT,
@@ -319,11 +319,13 @@ def _plan_one(V, F, *, lam, th, a, robust_iters, feature_iters, mask_update_ever
                                           "noise_length", "noise_gamma_scale")}}
     if np.isfinite(info["gamma_relief"]):  # read where the organic law's σ̂ needs it
         reading["gamma_relief"] = info["gamma_relief"]
-    return DenoisePlan(
+    plan = DenoisePlan(
         n_vertices=len(V), n_faces=len(F), options=options, reading=reading, lam=lam_used,
         huber_delta=delta, willmore_weight=ww, outside_weight=w_out, inner_iters=inner_iters,
         stages=tuple(stages), start_from_probe=bool(warm), presmooth_steps=int(kp),
         polish=options["polish"], decisions=tuple(dec), inner=inner_plan, _state=st)
+    st.planned = planned_values(plan)  # what the executor compares a user's edits against
+    return plan
 
 
 def _plan_presmooth(V, F, st: _State, options: dict, *, capped_run: bool, dec: list):

@@ -19,7 +19,7 @@ from meshrepair.denoise.folds import (
     _volume_ratio,
     unfold_result,
 )
-from meshrepair.denoise.plan import Decision, DenoisePlan, _State, mesh_key
+from meshrepair.denoise.plan import Decision, DenoisePlan, _State, edited_fields, mesh_key
 from meshrepair.denoise.result import DenoiseResult
 from meshrepair.denoise.rules import FLAT_A, lambda_from_noise, robust_a_from_noise
 from meshrepair.errors import MeshRepairError
@@ -45,17 +45,18 @@ def _execute(plan: DenoisePlan, V, F, callback=None, *, made_here: bool = False,
             or (not made_here and st.mesh_key != mesh_key(V, F))):
         raise MeshRepairError("this plan was made for another mesh: make it with "
                               "mr.plan_denoise(V, F) on the mesh you denoise")
-    if plan.if_correlated is not None:
-        return _execute_tested(plan, V, F, callback, made_here)
-    o = plan.options
-    info = dict(st.info)
-    gamma, gamma_rms, impulsive, topo = st.gamma, st.gamma_rms, st.impulsive, st.topo
     planned = 0 if st.presmooth is None else st.presmooth["steps"]
     if plan.presmooth_steps not in (0, planned) or (plan.presmooth_steps and plan.inner is None):
         raise MeshRepairError(
             f"presmooth_steps of a plan can be kept ({planned}) or set to 0, not "
             f"{plan.presmooth_steps}: the low-passed input and its plan are made by "
             "plan_denoise")
+    _refuse_unused_edits(plan, planned)
+    if plan.if_correlated is not None:
+        return _execute_tested(plan, V, F, callback, made_here)
+    o = plan.options
+    info = dict(st.info)
+    gamma, gamma_rms, impulsive, topo = st.gamma, st.gamma_rms, st.impulsive, st.topo
     if plan.presmooth_steps:
         r = _execute(plan.inner, st.presmooth["Vp"], F, callback, made_here=made_here)
         r.params.update(presmooth_steps=plan.presmooth_steps,
@@ -195,6 +196,50 @@ def _execute(plan: DenoisePlan, V, F, callback=None, *, made_here: bool = False,
         # the record keeps no arrays of the reading: it would hold the probe's result alive
         plan=replace(plan, after_solve=_after(info, st.info, ()), _state=None),
     )
+
+
+def _refuse_unused_edits(plan: DenoisePlan, planned: int) -> None:
+    """Raise when fields the user edited on ``plan`` would not be used by the run.
+
+    A plan that low-passes its input first (``presmooth_steps > 0``) runs the whole model on the
+    low-passed input with the plan in ``inner``: its own fields describe a run on the raw input
+    and are used only with ``presmooth_steps=0``. A plan that carries ``if_correlated`` runs
+    that plan instead when the white result fails the white-noise test. An edit of a field
+    that the plan run instead neither carries (the same value) nor edits itself, or an edit of
+    ``inner`` when ``presmooth_steps=0``, would be dropped without a word, so the run is
+    refused with the way to say what is meant. ``planned``: the plan's own ``presmooth_steps``."""
+    if plan.presmooth_steps:
+        lost = _not_carried(plan, plan.inner)
+        if lost:
+            raise MeshRepairError(
+                f"this plan low-passes the input first (presmooth_steps="
+                f"{plan.presmooth_steps}) and runs the model on the result with the plan in "
+                f"`inner`; the fields edited here ({', '.join(lost)}) belong to a run on the "
+                f"raw input and would not be used: edit `inner` (dataclasses.replace(plan, "
+                f"inner=dataclasses.replace(plan.inner, ...))) or also set presmooth_steps=0 "
+                f"to run the raw input with them")
+    elif plan.inner is not None and edited_fields(plan.inner):
+        raise MeshRepairError(
+            f"`inner` was edited ({', '.join(edited_fields(plan.inner))}) but presmooth_steps=0 "
+            f"runs the raw input without it: keep presmooth_steps={planned} to run `inner`, "
+            f"or edit the plan's own fields")
+    lost = _not_carried(plan, plan.if_correlated)
+    if plan.if_correlated is not None and lost:
+        raise MeshRepairError(
+            f"this plan runs the white-noise model and, when its residual fails the "
+            f"white-noise test, the plan in `if_correlated`, which does not carry the fields "
+            f"edited here ({', '.join(lost)}): set if_correlated=None to run this plan alone, "
+            f"or edit `if_correlated` too")
+
+
+def _not_carried(plan: DenoisePlan, other: DenoisePlan | None) -> list[str]:
+    """The fields edited on ``plan`` that ``other``, the plan that may run instead, neither
+    edits itself nor holds at the same value."""
+    edited = edited_fields(plan)
+    if other is None or not edited:
+        return edited
+    also = set(edited_fields(other))
+    return [k for k in edited if k not in also and getattr(other, k) != getattr(plan, k)]
 
 
 def _fallback_edges(force, ww: float, w: float):

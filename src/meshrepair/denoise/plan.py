@@ -186,6 +186,23 @@ class _State:
     presmooth: dict | None = None
     first_probe: Any = None
     lowpassed_from: Any = None  # (raw input y, pairs k_p) of a coarse-to-fine run's input
+    planned: dict | None = None  # the editable fields as the reading decided them
+
+
+def planned_values(plan: DenoisePlan) -> dict:
+    """The values of ``plan``'s editable fields (:meth:`DenoisePlan.editable`) but
+    ``presmooth_steps``, by name: what :func:`edited_fields` compares against."""
+    return {k: getattr(plan, k) for k in plan.editable() if k != "presmooth_steps"}
+
+
+def edited_fields(plan: DenoisePlan) -> list[str]:
+    """The editable fields of ``plan`` (but ``presmooth_steps``) whose value differs from the
+    one the reading decided: the user's edits (:func:`dataclasses.replace`). Empty for a plan
+    that carries no reading."""
+    st = plan._state
+    if st is None or st.planned is None:
+        return []
+    return [k for k, v in st.planned.items() if getattr(plan, k) != v]
 
 
 def mesh_key(V: np.ndarray, F: np.ndarray) -> str:
