@@ -62,7 +62,7 @@ def test_running_the_plan_equals_the_one_shot_call(case, request):
     assert q.plan.after_solve  # the finish's decisions are recorded in the plan that ran
     if case == "heavy_spot":
         assert p.presmooth_steps > 0 and p.inner is not None
-        assert "low-passed by" in p.explain()
+        assert "low-passed by" in p.explain() and "the plan `inner` runs" in p.explain()
 
 
 def _same_params(a, b):

@@ -122,7 +122,8 @@ class DenoisePlan:
                        f"mask={s.mask} max_iter={s.max_iter}")
         if self.inner is not None:
             out.append(f"{indent}  then, on the input low-passed by {self.presmooth_steps} "
-                       "Taubin pairs:")
+                       "Taubin pairs, the plan `inner` runs (the fields above are those of a "
+                       "run on the raw input, used with presmooth_steps=0):")
             out.append(self.inner.explain(indent + "    "))
         if self.if_correlated is not None:
             out.append(f"{indent}  if the result's residual fails the white-noise test, "
