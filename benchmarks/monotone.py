@@ -57,24 +57,19 @@ def tuned_taubin(Vn, F, Vt, faces=None):
     return best
 
 
-def oracle_peers(Vn, F, Vt, methods):
+def oracle_peers(Vn, F, Vt, methods, name: str = ""):
     """``(MSAE, label)`` of the best run over the grids of ``methods`` (compare.py ``Method``s)
-    on the noisy ``Vn`` against the truth ``Vt``; runs that fail or change the connectivity are
-    left out."""
-    from meshrepair.metrics import msae
+    on the noisy ``Vn`` against the truth ``Vt``, each grid point run and scored by compare.py's
+    ``run_one`` (runs that fail or change the connectivity are left out)."""
+    import compare
 
+    case = compare.Case(name, "monotone", Vn, Vt, F, "monotone.py")
     best = (float("inf"), "-")
     for m in methods:
-        for kw in m.grid:
-            try:
-                X, Fo = m.run(Vn, F, **kw)
-            except Exception:  # noqa: BLE001  (a filter that fails on a grid point)
-                continue
-            if len(X) != len(Vn) or not np.array_equal(Fo, F) or not np.isfinite(X).all():
-                continue
-            v = msae(X, Vt, F)
-            if v < best[0]:
-                best = (v, m.short)
+        b = compare.MethodResult(m, compare.Run({}, error="not run"),
+                                 [compare.run_one(m, case, kw) for kw in m.grid]).best("msae")
+        if b is not None and b.msae < best[0]:
+            best = (b.msae, m.short)
     return best
 
 
@@ -139,7 +134,7 @@ def main(argv=None) -> int:
             if m > m_in:
                 flags.append("> input")
             prev = m
-            bp = oracle_peers(Vn, F, Vt, peers) if peers else (float("inf"), "-")
+            bp = oracle_peers(Vn, F, Vt, peers, f"{name} {g:g}") if peers else (float("inf"), "-")
             best, who = (mt, "Taubin") if mt <= bp[0] else bp
             rows.append({"mesh": name, "gamma": g, "direction": args.direction,
                          "best_filter": best, "best_filter_name": who,
