@@ -218,11 +218,11 @@ def _refuse_unused_edits(plan: DenoisePlan, planned: int) -> None:
                 f"raw input and would not be used: edit `inner` (dataclasses.replace(plan, "
                 f"inner=dataclasses.replace(plan.inner, ...))) or also set presmooth_steps=0 "
                 f"to run the raw input with them")
-    elif plan.inner is not None and edited_fields(plan.inner):
+    elif plan.inner is not None and (lost := edited_fields(plan.inner)):
         raise MeshRepairError(
-            f"`inner` was edited ({', '.join(edited_fields(plan.inner))}) but presmooth_steps=0 "
-            f"runs the raw input without it: keep presmooth_steps={planned} to run `inner`, "
-            f"or edit the plan's own fields")
+            f"`inner` was edited ({', '.join(lost)}) but presmooth_steps=0 runs the raw input "
+            f"without it: keep presmooth_steps={planned} to run `inner`, or edit the plan's own "
+            f"fields")
     lost = _not_carried(plan, plan.if_correlated)
     if plan.if_correlated is not None and lost:
         raise MeshRepairError(
