@@ -75,16 +75,15 @@ def test_gate():
 
 
 def test_steps_are_the_least_risk_of_the_input_low_pass():
-    """k = argmin R(k) against brute force (each T^k y filtered from y, risk by normal_risk);
-    0 outside the gate or at c ≥ c_0. A smooth sphere under noise wants a long filter."""
+    """k = argmin R(k) against brute force (each T^k y filtered from y, risk by normal_risk).
+    A smooth sphere under noise wants a long filter."""
     from meshrepair.denoise import lengthcheck as lc
     from meshrepair.denoise.presmooth import presmooth
 
     V, F, e = _sphere(3)
     ell = float(np.linalg.norm(V[e[:, 0]] - V[e[:, 1]], axis=1).mean())
     Y = add_noise(V, F, 0.2, direction="normal", seed=4)
-    kw = dict(support_fraction=0.05, outside=1.0, willmore=1.0, impulsive=False)
-    k = co.coarse_steps(Y, F, e, 0.15, **kw)
+    k = co.least_risk_steps(Y, F, e)
     s = lc.normal_level(Y, F, e)
     free = np.ones(len(Y), bool)
     brute = [lc.normal_risk(Y, presmooth(Y, e, free, j), F, e, j, s)
@@ -92,11 +91,32 @@ def test_steps_are_the_least_risk_of_the_input_low_pass():
     assert k == int(np.argmin(brute)) and k > 5
     assert s == pytest.approx(0.2 * ell, rel=0.1)
     # the coarse-to-fine run: k_p pairs already applied, the rest of the least-risk length
-    assert co.coarse_steps(Y, F, e, 0.15, before=3, **kw) == k - 3
-    assert co.coarse_steps(Y, F, e, 0.15, before=co.MAX_STEPS, **kw) == 0
-    assert co.coarse_steps(Y, F, e, co.C_0, **kw) == 0  # relief at the mesh's scale
-    assert co.coarse_steps(Y, F, e, float("nan"), **kw) == 0
-    assert co.coarse_steps(Y, F, e, 0.15, **{**kw, "impulsive": True}) == 0
+    assert co.least_risk_steps(Y, F, e, before=3) == k - 3
+    assert co.least_risk_steps(Y, F, e, before=co.MAX_STEPS) == 0
+
+
+def test_read_at_the_scale_of_the_low_pass(monkeypatch):
+    """c is read after max(m_0, k) pairs, k the least-risk length; the k pairs are applied only
+    when c < c_0, and nothing is read outside the gate. A noisy sphere (the result of a model
+    that removed nothing) reads rough after m_0 pairs but smooth at the length the risk asks
+    for, so it is filtered."""
+    V, F, e = _sphere(3)
+    Y = add_noise(V, F, 0.2, direction="normal", seed=4)
+    kw = dict(support_fraction=0.05, outside=1.0, willmore=1.0, impulsive=False)
+    k = co.least_risk_steps(Y, F, e)
+    assert k > co.READ_STEPS and co.read_steps(k) == k and co.read_steps(2) == co.READ_STEPS
+    c, kc = co.coarse_read(Y, Y, F, e, **kw)
+    assert c == pytest.approx(co.curvature_roughness(Y, F, e, steps=k), rel=1e-12)
+    assert co.curvature_roughness(Y, F, e) >= co.C_0 > c and kc == k
+    assert co.coarse_read(Y, Y, F, e, before=3, **kw) == (pytest.approx(
+        co.curvature_roughness(Y, F, e, steps=k - 3), rel=1e-12), k - 3)
+    monkeypatch.setattr(co, "C_0", c)  # relief at the mesh's scale: c ≥ c_0
+    assert co.coarse_read(Y, Y, F, e, **kw) == (pytest.approx(c, rel=1e-12), 0)
+    c_nan, k_nan = co.coarse_read(Y, Y, F, e, **{**kw, "impulsive": True})
+    assert np.isnan(c_nan) and k_nan == 0
+    # a result with no curvature to read (every vertex at one point): c is NaN, nothing applied
+    c0, k0 = co.coarse_read(Y, np.zeros_like(Y), F, e, **kw)
+    assert np.isnan(c0) and k0 == 0
 
 
 def test_fold_zone_is_fixed_and_the_rest_is_filtered():

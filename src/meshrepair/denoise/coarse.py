@@ -18,12 +18,17 @@ variation are
 a dimensionless ratio (invariant to scaling, rotation and translation of the mesh; 0 on a
 sphere of uniform sampling, where ``h`` is constant, and growing towards √2 as ``h`` becomes
 white): how much the curvature changes from a two-ring neighbourhood to the next relative to
-its own size, at the scale of the filter ``T^m`` (√m ≈ 3 rings). The ``m`` pairs remove what
+its own size, at the scale of the filter ``T^m`` (√m rings). The ``m`` pairs remove what
 the solve and the earlier finishes left of the noise, which otherwise decides ``c``: read on
 the result itself (``m = 0``) it varies with the noise level and with how much the finishes
-smoothed, while after the ``m`` pairs it reads within about ±0.02 of the clean surface's own
-value (after the same pairs) across noise levels; smooth surfaces read about 0.16-0.18,
-scanned relief 0.2-0.35.
+smoothed. The read is made at the scale of the low-pass it decides on,
+``m = max(m_0, k)`` with ``m_0 = 8`` and ``k`` the least-risk length below: the question is
+whether the surface is smooth at the length the filter would have, and a result that kept
+noise of a few rings (more of it when the noise has a tangential part, which the prior does
+not remove) reads rough at ``m_0`` pairs although the surface is smooth at ``k``. Where the
+risk asks for no more than ``m_0`` pairs (low noise) the read is the ``m_0``-pair one. After
+these pairs ``c`` reads within about ±0.02 of the clean surface's own value across noise
+levels; smooth surfaces read about 0.06-0.18, scanned relief 0.19-0.39.
 
 **The gate** (:func:`gated`): an organic mesh (crease support below
 :data:`meshrepair.denoise.rules.CAD_SUPPORT`, outside weight 1) with white, non-impulsive noise
@@ -33,7 +38,7 @@ In the coarse-to-fine run (:mod:`meshrepair.denoise.presmooth`) the noise model 
 input's (white, non-impulsive: that run's own gate), not the reading of the filtered noise of
 the low-passed input, and the risk below is read on the raw input.
 
-**The length** (:func:`coarse_steps`) is the one whose low-pass of the *input* has the least
+**The length** (:func:`least_risk_steps`) is the one whose low-pass of the *input* has the least
 estimated risk: with ``T`` one λ|μ pair, ``y`` the input and ``R(k)`` Stein's unbiased risk
 estimate of ``T^k y`` along the normals (:func:`meshrepair.denoise.lengthcheck.risk_curve`,
 the noise level σ̂ read there by one pair),
@@ -73,7 +78,7 @@ import numpy as np
 
 COARSE = True  # switch of the low-pass
 C_0 = 0.185  # c_0: curvature variation below which the surface is smooth at its resolution
-READ_STEPS = 8  # m: λ|μ pairs applied before the read of c
+READ_STEPS = 8  # m_0: the fewest λ|μ pairs applied before the read of c
 MAX_STEPS = 40  # K_max: the longest low-pass the risk is read for
 
 
@@ -119,17 +124,34 @@ def gated(*, support_fraction: float, outside: float, willmore: float, impulsive
     return bool(support_fraction < CAD_SUPPORT)
 
 
-def coarse_steps(V: np.ndarray, F: np.ndarray, edges: np.ndarray, roughness: float, *,
-                 before: int = 0, **gate) -> int:
-    """λ|μ pairs ``k`` of the module docstring: the least risk of ``T^k V`` on the raw input
-    ``V`` less the ``before`` pairs already applied to it (``k_p``); 0 when the gate
-    (:func:`gated` with the keywords ``gate``, and ``c < c_0``) does not fire."""
+def least_risk_steps(V: np.ndarray, F: np.ndarray, edges: np.ndarray, *,
+                     before: int = 0) -> int:
+    """``k − k_p``, ``k = argmin_{0 ≤ k ≤ K_max + k_p} R(k)`` of the module docstring on the
+    raw input ``V`` (``k_p`` = ``before``, the pairs already applied to the model's input),
+    at least 0."""
     from meshrepair.denoise.lengthcheck import risk_curve
 
-    if not gated(**gate) or not (np.isfinite(roughness) and roughness < C_0):
-        return 0
     k = int(np.argmin(risk_curve(V, F, edges, MAX_STEPS + int(before))))
     return max(0, k - int(before))
+
+
+def read_steps(k: int) -> int:
+    """``m = max(m_0, k)``: the λ|μ pairs applied before the read of ``c`` (module docstring)."""
+    return max(READ_STEPS, int(k))
+
+
+def coarse_read(V: np.ndarray, X: np.ndarray, F: np.ndarray, edges: np.ndarray, *,
+                before: int = 0, **gate) -> tuple[float, int]:
+    """``(c, k)`` of the module docstring: ``k`` the least-risk length of the raw input ``V``
+    less the ``before`` pairs already applied (:func:`least_risk_steps`), ``c`` the curvature
+    variation of the model's result ``X`` read after ``max(m_0, k)`` pairs, and the pairs to
+    apply, ``k`` when ``c < c_0`` and 0 otherwise; ``(NaN, 0)`` outside the gate
+    (:func:`gated` with the keywords ``gate``)."""
+    if not gated(**gate):
+        return float("nan"), 0
+    k = least_risk_steps(V, F, edges, before=before)
+    c = curvature_roughness(X, F, edges, steps=read_steps(k))
+    return c, (k if np.isfinite(c) and c < C_0 else 0)
 
 
 def normal_only(tangential: float, gamma: float) -> bool:

@@ -200,9 +200,8 @@ def finish_result(V, V_out, F, topo, M_E, *, data, sup_v, gamma, gamma_rms, impu
                     willmore=1.0 if lowpassed else ww, impulsive=impulsive and not lowpassed,
                     lowpassed=y is None)
         if _co.gated(**gate):
-            c = _co.curvature_roughness(V_out, F, topo.edges)
+            c, kc = _co.coarse_read(y, V_out, F, topo.edges, before=kp, **gate)
             info["coarse_roughness"] = c
-            kc = _co.coarse_steps(y, F, topo.edges, c, before=kp, **gate)
             if kc:
                 nrm = _co.normal_only(info["tangential_ratio"], gamma)
                 keep = bool(info["reintegrate_steps"]) and not impulsive  # its folds are kept
