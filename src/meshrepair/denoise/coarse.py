@@ -39,13 +39,19 @@ input's (white, non-impulsive: that run's own gate), not the reading of the filt
 the low-passed input, and the risk below is read on the raw input.
 
 **The length** (:func:`least_risk_steps`) is the one whose low-pass of the *input* has the least
-estimated risk: with ``T`` one λ|μ pair, ``y`` the input and ``R(k)`` Stein's unbiased risk
-estimate of ``T^k y`` along the normals (:func:`meshrepair.denoise.lengthcheck.risk_curve`,
-the noise level σ̂ read there by one pair),
+estimated risk of its normals: with ``T`` one λ|μ pair, ``y`` the input, ``r = P(y − T^k y)``
+the residual along the normals and ``R_∇(k)`` Stein's unbiased estimate of the risk of the
+gradient of the normal offsets, which is to first order the error of the face normals
+(:func:`meshrepair.denoise.lengthcheck.risk_curve` with ``normals=True``, ``L`` the graph
+Laplacian, the noise level σ̂ read there by one pair),
 
-.. math:: k = \\arg\\min_{0 \\le k \\le K_{max}} R(k),
-          \\qquad R(k) = \\sum_i \\bigl(n_i\\cdot(y - T^k y)_i\\bigr)^2
-          + 2σ̂^2\\,\\mathrm{tr}\\,T^k, \\qquad K_{max} = 40.
+.. math:: k = \\arg\\min_{0 \\le k \\le K_{max}} R_∇(k),
+          \\qquad R_∇(k) = \\sum_{(i,j) \\in E} (r_i - r_j)^2
+          + 2σ̂^2\\,\\mathrm{tr}(L\\,T^k), \\qquad K_{max} = 40.
+
+The risk of the positions, ``Σ_i r_i² + 2σ̂² tr T^k``, weighs an error of long wavelength (which
+costs positions but hardly normals) like one of a few rings and asks for shorter filters on
+smooth surfaces than the normals want (module docstring of ``lengthcheck``).
 
 The model's result ``X`` is then filtered by the same ``k`` pairs, ``T^k X``. In the
 coarse-to-fine run (:mod:`meshrepair.denoise.presmooth`) the model ran on ``T^{k_p} y``: the risk
@@ -54,11 +60,11 @@ low-passes together are ``T^k`` (the λ|μ pairs commute). Where the surface is 
 mesh's resolution the linear filter at its best length is close to the best
 estimate of the surface, and the model's result keeps part of the noise's mid frequencies
 (bumps of a few rings) that the filter removes: the filter's length is then set by the noise
-level *and* by how much shape the surface has at that length, which ``R(k)`` reads from the
+level *and* by how much shape the surface has at that length, which ``R_∇(k)`` reads from the
 input and which a rule in γ̂ alone does not. The gate ``c < c_0`` is needed: on scanned relief
 the model's result is already better than any ``T^k y``, and a further ``T^k`` on it only
-removes relief, while ``R(k)`` (a risk of the filter on the input, not of ``T^k X``) still has
-its minimum at a few pairs.
+removes relief, while ``R_∇(k)`` (a risk of the filter on the input, not of ``T^k X``) still
+has its minimum at a few pairs.
 
 The step is ``k`` full λ|μ pairs (:func:`meshrepair.denoise.lowpass.taubin_region`) on every
 vertex, after the organic finish (as in :mod:`meshrepair.denoise.presmooth`, the probe's short
@@ -126,12 +132,12 @@ def gated(*, support_fraction: float, outside: float, willmore: float, impulsive
 
 def least_risk_steps(V: np.ndarray, F: np.ndarray, edges: np.ndarray, *,
                      before: int = 0) -> int:
-    """``k − k_p``, ``k = argmin_{0 ≤ k ≤ K_max + k_p} R(k)`` of the module docstring on the
+    """``k − k_p``, ``k = argmin_{0 ≤ k ≤ K_max + k_p} R_∇(k)`` of the module docstring on the
     raw input ``V`` (``k_p`` = ``before``, the pairs already applied to the model's input),
     at least 0."""
     from meshrepair.denoise.lengthcheck import risk_curve
 
-    k = int(np.argmin(risk_curve(V, F, edges, MAX_STEPS + int(before))))
+    k = int(np.argmin(risk_curve(V, F, edges, MAX_STEPS + int(before), normals=True)))
     return max(0, k - int(before))
 
 
