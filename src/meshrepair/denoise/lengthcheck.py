@@ -144,12 +144,13 @@ def risk_curve(V: np.ndarray, F: np.ndarray, edges: np.ndarray, max_steps: int,
     -------
     (max_steps + 1,) float64
     """
-    from meshrepair.denoise.presmooth import presmooth
+    from meshrepair.denoise.lowpass import taubin_region, umbrella
     from meshrepair.mesh.geometry import vertex_normals
 
     V = np.asarray(V, dtype=np.float64)
     s2 = float(normal_level(V, F, edges) if sigma is None else sigma) ** 2
     free = np.ones(len(V), bool)
+    W = umbrella(edges, len(V))  # built once for the 2 · max_steps single pairs below
     X, Z = V, _probe(len(V))
     SZ = Z
     i, j = np.asarray(edges[:, 0]), np.asarray(edges[:, 1])
@@ -161,7 +162,7 @@ def risk_curve(V: np.ndarray, F: np.ndarray, edges: np.ndarray, max_steps: int,
     out = np.empty(int(max_steps) + 1)
     for k in range(int(max_steps) + 1):
         if k:
-            X, SZ = presmooth(X, edges, free, 1), presmooth(SZ, edges, free, 1)
+            X, SZ = taubin_region(X, edges, free, 1, W=W), taubin_region(SZ, edges, free, 1, W=W)
         rn = np.einsum("ij,ij->i", V - X, vertex_normals(X, F))
         if normals:
             rn = rn[i] - rn[j]

@@ -93,18 +93,20 @@ def umbrella(edges: np.ndarray, n_vertices: int) -> sp.csr_matrix:
 
 def taubin_region(V: np.ndarray, edges: np.ndarray, free: np.ndarray, steps: int, *,
                   lam: float = TAUBIN_LAM, mu: float = TAUBIN_MU,
-                  F: np.ndarray | None = None) -> np.ndarray:
+                  F: np.ndarray | None = None, W: sp.csr_matrix | None = None) -> np.ndarray:
     """``steps`` λ|μ pairs of the module docstring on the vertices ``free`` (boolean mask);
     the others do not move. With faces ``F`` each displacement is projected on the vertex
     normals of the current mesh (``d ← (d·n) n``): the tangential layout is kept (normal-only
-    filtering, for noise along the normals). Returns new ``(nV, 3)`` float64 vertices (``V`` is
-    not modified).
+    filtering, for noise along the normals). ``W``: :func:`umbrella` of ``edges`` when the
+    caller already holds it (a loop of single pairs builds it once). Returns new ``(nV, 3)``
+    float64 vertices (``V`` is not modified).
     """
     V = np.array(V, dtype=np.float64)
     free = np.asarray(free, dtype=bool)
     if steps <= 0 or not free.any():
         return V
-    W = umbrella(edges, len(V))
+    if W is None:
+        W = umbrella(edges, len(V))
     m = free[:, None].astype(np.float64)
 
     def move(c):
