@@ -223,8 +223,7 @@ def _refuse_unused_edits(plan: DenoisePlan, planned: int) -> None:
             f"`inner` was edited ({', '.join(lost)}) but presmooth_steps=0 runs the raw input "
             f"without it: keep presmooth_steps={planned} to run `inner`, or edit the plan's own "
             f"fields")
-    lost = _not_carried(plan, plan.if_correlated)
-    if plan.if_correlated is not None and lost:
+    if plan.if_correlated is not None and (lost := _not_carried(plan, plan.if_correlated)):
         raise MeshRepairError(
             f"this plan runs the white-noise model and, when its residual fails the "
             f"white-noise test, the plan in `if_correlated`, which does not carry the fields "
