@@ -112,6 +112,12 @@ def _correlated_only(p):
     return p, False
 
 
+def _cad_only(p):
+    if p.if_structured is not None:
+        return replace(p, if_structured=None), True
+    return p, False
+
+
 def _no_robust(p):
     return _edit_stages(p, lambda s: [x for x in s if x.name != "robust"])
 
@@ -132,6 +138,8 @@ INGREDIENTS = [
                "its residual fails the white-noise test", PLAN, _white_only),
     Ingredient("white model", "the correlated model's plan alone (plan.if_correlated), without "
                "the white model's run and its test", PLAN, _correlated_only),
+    Ingredient("structure test", "if_structured=None: a CAD part's result is kept even when "
+               "its residual holds structure (the organic plan not tried)", PLAN, _cad_only),
     Ingredient("w", "willmore_weight=1: no edge-Willmore weight read from the noise's correlation",
                PLAN, _set(willmore_weight=1.0)),
     Ingredient("V-steps", "inner_iters=3: no extra V-steps for correlated noise", PLAN, _inner3),

@@ -17,6 +17,7 @@ import numpy as np
 from meshrepair.denoise import coarse_lowpass as _clp
 from meshrepair.denoise import crease_network as _cn
 from meshrepair.denoise import scalefree as _sf
+from meshrepair.denoise import structure as _structure
 from meshrepair.denoise.checks import _checked
 from meshrepair.denoise.folds import fidelity_data, unfolded_data_after_probe
 from meshrepair.denoise.plan import Decision, DenoisePlan, _State, mesh_key, planned_values
@@ -66,15 +67,20 @@ def _plan(V, F, *, digest: bool = True, probe_result=None, **options) -> Denoise
     the white-noise model's, read from the same probe, and carries the correlated-noise model's
     plan in ``if_correlated``: the executor runs the white model first and the correlated one
     only when the white result's residual fails the white-noise test of
-    :mod:`meshrepair.denoise.whiteness`. ``digest``: record the digest of ``(V, F)`` that
-    :func:`~meshrepair.denoise.execute._execute` checks (off when the caller runs the plan on
-    these arrays at once). ``probe_result``: a robust probe already run on an input of this
-    connectivity and vertex order (:func:`_plan_one`); the plan reads it instead of running
-    its own."""
+    :mod:`meshrepair.denoise.whiteness`. A CAD part's plan on white noise carries the organic
+    reading's plan in ``if_structured`` (:mod:`meshrepair.denoise.structure`). ``digest``:
+    record the digest of ``(V, F)`` that :func:`~meshrepair.denoise.execute._execute` checks
+    (off when the caller runs the plan on these arrays at once). ``probe_result``: a robust
+    probe already run on an input of this connectivity and vertex order (:func:`_plan_one`);
+    the plan reads it instead of running its own."""
     p = _plan_one(V, F, digest=digest, probe_result=probe_result, **options)
     first, p._state.first_probe = p._state.first_probe, None
     if p.willmore_weight <= 1.0 or options.get("willmore_weight") is not None:
-        return p
+        if not _structure.applies(p, options):
+            return p
+        po = _plan_one(V, F, digest=digest, **options, organic=True, probe_result=first)
+        po._state.first_probe = None
+        return replace(p, if_structured=po)
     pw = _plan_one(V, F, digest=digest, **options, white=True, probe_result=first)
     pw._state.first_probe = None
     from meshrepair.denoise.whiteness import LEVEL_MAX, RHO1_MAX
@@ -92,10 +98,13 @@ def _plan_one(V, F, *, lam, th, a, robust_iters, feature_iters, mask_update_ever
               min_feature_edges, tol, unfold, inner_solver, inner_iters, n_solver, stages,
               huber_delta, willmore_weight, regions, polish=True,
               presmoothed: bool = False, read_from: np.ndarray | None = None,
-              capped: bool = False, white: bool = False, probe_result=None,
+              capped: bool = False, white: bool = False, organic: bool = False,
+              probe_result=None,
               digest: bool = True) -> DenoisePlan:
     """One noise model's plan: the white model's with ``white`` (Willmore weight 1), else the
-    reading's; ``probe_result`` is a probe already run on this input (not run again)."""
+    reading's; with ``organic``, the crease support is not taken as a CAD part (the organic
+    alternative of :mod:`meshrepair.denoise.structure`); ``probe_result`` is a probe already
+    run on this input (not run again)."""
     from meshrepair.mesh.validate import _check_mesh
 
     options = _checked(lam, th, a, robust_iters, feature_iters, mask_update_every,
@@ -238,6 +247,10 @@ def _plan_one(V, F, *, lam, th, a, robust_iters, feature_iters, mask_update_ever
         sf = _sf.cad_support(topo_w, r1.N, sup, q_edges, th=th)  # scale-free CAD support
         if n_unf and Vd is Vw and not unfolded_data_after_probe(impulsive, tr, sf):
             Vd, Vi = Vn_w, Vw  # noise with a tangential part: the input is the main run's data
+        sf_read = sf
+        if organic:  # the organic alternative of a CAD plan (structure.py)
+            dec.append(_structure.organic_decision(sf))
+            sf = 0.0
         if lam is None and ww > 1.0:  # correlated noise: λ from its level at its own scale
             lam_used = lambda_from_noise(max(gamma, ns.gamma), lowpassed=presmoothed)
             opts_kw["lam"] = lam_used
@@ -317,6 +330,8 @@ def _plan_one(V, F, *, lam, th, a, robust_iters, feature_iters, mask_update_ever
                "folded_faces": n_unf, **{k: info[k] for k in
                                          ("tangential_ratio", "support_fraction", "noise_rho",
                                           "noise_length", "noise_gamma_scale")}}
+    if organic:  # the value read; the plan's gates saw 0
+        reading["support_fraction"] = sf_read
     if np.isfinite(info["gamma_relief"]):  # read where the organic law's σ̂ needs it
         reading["gamma_relief"] = info["gamma_relief"]
     plan = DenoisePlan(

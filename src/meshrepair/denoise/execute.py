@@ -12,6 +12,7 @@ from dataclasses import replace
 
 import numpy as np
 
+from meshrepair.denoise import structure as _structure
 from meshrepair.denoise.finish import REINTEGRATE_KEEPS_FOLDS, finish_result
 from meshrepair.denoise.folds import (
     COLLAPSE_VOLUME_RATIO,
@@ -54,6 +55,8 @@ def _execute(plan: DenoisePlan, V, F, callback=None, *, made_here: bool = False,
     _refuse_unused_edits(plan, planned)
     if plan.if_correlated is not None:
         return _execute_tested(plan, V, F, callback, made_here)
+    if plan.if_structured is not None:
+        return _structure.execute_structured(plan, V, F, callback, made_here, _execute)
     o = plan.options
     info = dict(st.info)
     gamma, gamma_rms, impulsive, topo = st.gamma, st.gamma_rms, st.impulsive, st.topo

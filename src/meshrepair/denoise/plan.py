@@ -80,6 +80,9 @@ class DenoisePlan:
     if_correlated : the correlated-noise model's plan, run instead when the result of this
         (white-noise) plan fails the white-noise test (:mod:`meshrepair.denoise.whiteness`);
         ``None``: this plan's result is kept. Replace it by ``None`` to run this plan alone
+    if_structured : the organic reading's plan of a CAD part, run when the result of this plan
+        removes structure (its residual fails the method-noise test,
+        :mod:`meshrepair.denoise.structure`); ``None``: this plan's result is kept
     after_solve : decisions the executor takes on the solve's result (filled in
         :attr:`meshrepair.DenoiseResult.plan`; empty before the run)
     """
@@ -102,6 +105,7 @@ class DenoisePlan:
     decisions: tuple[Decision, ...] = ()
     inner: DenoisePlan | None = None
     if_correlated: DenoisePlan | None = None
+    if_structured: DenoisePlan | None = None
     after_solve: tuple[Decision, ...] = ()
     _state: Any = field(default=None, repr=False, compare=False)
 
@@ -129,6 +133,10 @@ class DenoisePlan:
             out.append(f"{indent}  if the result's residual fails the white-noise test, "
                        "instead:")
             out.append(self.if_correlated.explain(indent + "    "))
+        if self.if_structured is not None:
+            out.append(f"{indent}  if the result's residual holds structure (method-noise "
+                       "test), the organic plan, kept when its residual passes:")
+            out.append(self.if_structured.explain(indent + "    "))
         if self.after_solve:
             out.append(f"{indent}  after the solve:")
             out += [f"{indent}    {d.line()}" for d in self.after_solve]
