@@ -110,3 +110,24 @@ def test_an_edited_cad_plan_runs_alone_and_says_so(cad_case, monkeypatch):
     monkeypatch.undo()
     np.testing.assert_array_equal(r.V, mr.denoise(Y, F, plan=dataclasses.replace(
         q, if_structured=None)).V)
+
+
+def test_the_plans_of_one_input_read_it_once(cad_case, monkeypatch):
+    """The CAD plan and its organic alternative read the same input and probe: each reading
+    (validation, noise level, direction, correlation, crease support) runs once."""
+    from meshrepair.denoise import analysis
+
+    calls: dict[str, int] = {}
+    for name in ("noise_statistics", "tangential_ratio", "noise_scale", "flat_edges"):
+        real = getattr(analysis, name)
+
+        def counted(*a, _real=real, _name=name, **k):
+            calls[_name] = calls.get(_name, 0) + 1
+            return _real(*a, **k)
+
+        monkeypatch.setattr(analysis, name, counted)
+    p = mr.plan_denoise(*cad_case)
+    assert p.if_structured is not None
+    # noise_statistics: the input's level, and the probe's relief level of the organic law
+    assert calls == {"noise_statistics": 2, "tangential_ratio": 1, "noise_scale": 1,
+                     "flat_edges": 1}

@@ -19,7 +19,7 @@ from meshrepair.denoise import crease_network as _cn
 from meshrepair.denoise import scalefree as _sf
 from meshrepair.denoise import structure as _structure
 from meshrepair.denoise.checks import _checked
-from meshrepair.denoise.folds import fidelity_data, unfolded_data_after_probe
+from meshrepair.denoise.folds import fidelity_data, unfolded_data_after_probe, unfolded_input
 from meshrepair.denoise.plan import Decision, DenoisePlan, _State, mesh_key, planned_values
 from meshrepair.denoise.regions import flat_edges
 from meshrepair.denoise.rules import (
@@ -45,9 +45,8 @@ from meshrepair.denoise.rules import (
     willmore_weight_from_scale,
 )
 from meshrepair.denoise.scale import noise_scale, tangential_ratio
-from meshrepair.mesh.reorder import locality_order
+from meshrepair.mesh.reorder import reordered
 from meshrepair.model.noise import noise_statistics
-from meshrepair.model.relax import untangle
 from meshrepair.model.schedule import default_stages
 from meshrepair.model.solver import ADMMSolver, SolverOptions
 
@@ -73,15 +72,17 @@ def _plan(V, F, *, digest: bool = True, probe_result=None, **options) -> Denoise
     (off when the caller runs the plan on these arrays at once). ``probe_result``: a robust
     probe already run on an input of this connectivity and vertex order (:func:`_plan_one`);
     the plan reads it instead of running its own."""
-    p = _plan_one(V, F, digest=digest, probe_result=probe_result, **options)
+    memo: dict = {}  # the readings of this input, shared by the plans made here
+    p = _plan_one(V, F, digest=digest, probe_result=probe_result, memo=memo, **options)
     first, p._state.first_probe = p._state.first_probe, None
     if p.willmore_weight <= 1.0 or options.get("willmore_weight") is not None:
         if not _structure.applies(p, options):
             return p
-        po = _plan_one(V, F, digest=digest, **options, organic=True, probe_result=first)
+        po = _plan_one(V, F, digest=digest, **options, organic=True, probe_result=first,
+                       memo=memo)
         po._state.first_probe = None
         return replace(p, if_structured=po)
-    pw = _plan_one(V, F, digest=digest, **options, white=True, probe_result=first)
+    pw = _plan_one(V, F, digest=digest, **options, white=True, probe_result=first, memo=memo)
     pw._state.first_probe = None
     from meshrepair.denoise.whiteness import LEVEL_MAX, RHO1_MAX
 
@@ -99,12 +100,13 @@ def _plan_one(V, F, *, lam, th, a, robust_iters, feature_iters, mask_update_ever
               huber_delta, willmore_weight, regions, polish=True,
               presmoothed: bool = False, read_from: np.ndarray | None = None,
               capped: bool = False, white: bool = False, organic: bool = False,
-              probe_result=None,
-              digest: bool = True) -> DenoisePlan:
+              probe_result=None, digest: bool = True,
+              memo: dict | None = None) -> DenoisePlan:
     """One noise model's plan: the white model's with ``white`` (Willmore weight 1), else the
     reading's; with ``organic``, the crease support is not taken as a CAD part (the organic
     alternative of :mod:`meshrepair.denoise.structure`); ``probe_result`` is a probe already
-    run on this input (not run again)."""
+    run on this input (not run again); ``memo``: the readings of an earlier plan of the same
+    input and probe (:func:`_once`), read from there instead of again."""
     from meshrepair.mesh.validate import _check_mesh
 
     options = _checked(lam, th, a, robust_iters, feature_iters, mask_update_every,
@@ -114,9 +116,10 @@ def _plan_one(V, F, *, lam, th, a, robust_iters, feature_iters, mask_update_ever
     auto_inner = inner_iters is None
     inner_iters = 3 if auto_inner else options["inner_iters"]
     dec: list[Decision] = []
-    report, topo = _check_mesh(V, F, name="input mesh")
+    report, topo = _once(memo, "check", lambda: _check_mesh(V, F, name="input mesh"))
     Vr = V if read_from is None else read_from  # the readings' vertices
-    gamma, gamma_rms, gamma_iso = noise_statistics(Vr, F, topo, isolated=True)
+    gamma, gamma_rms, gamma_iso = _once(memo, "noise", lambda: noise_statistics(
+        Vr, F, topo, isolated=True))
     impulsive = is_impulsive(gamma, gamma_iso)
     lam_used = lambda_from_noise(gamma, lowpassed=presmoothed) if lam is None else float(lam)
     delta = huber_from_noise(gamma_rms, impulsive) if huber_delta is None else float(huber_delta)
@@ -132,16 +135,7 @@ def _plan_one(V, F, *, lam, th, a, robust_iters, feature_iters, mask_update_ever
     SolverOptions(**opts_kw).validate()  # fail fast on bad options
     log.info("denoise: %d vertices, %d faces, noise estimate %.3f (rms %.3f), lambda %.3g",
              len(V), len(F), gamma, gamma_rms, lam_used)
-    Vs = V
-    n_unf = 0
-    if unfold:
-        from meshrepair.model.relax import locally_flipped_faces
-
-        flipped = locally_flipped_faces(V, topo)
-        n_unf = int(flipped.sum())
-        if n_unf:
-            Vs, left = untangle(V, topo, flipped=flipped)
-            log.info("unfolded %d folded-over faces (%d left)", n_unf - left, left)
+    Vs, n_unf = _once(memo, "unfold", lambda: unfolded_input(V, topo)) if unfold else (V, 0)
     auto_robust = robust_iters is None and stages is None
     if robust_iters is None:
         robust_iters = robust_iters_from_noise(max(gamma, gamma_rms), n_unf / max(len(F), 1))
@@ -163,15 +157,9 @@ def _plan_one(V, F, *, lam, th, a, robust_iters, feature_iters, mask_update_ever
     reorder = len(V) >= REORDER_MIN_VERTICES
     pf = inv = None
     if reorder:  # run on a cache-friendly copy, map the result back exactly
-        pv, pf = locality_order(Vs, F)
-        inv = np.empty_like(pv)
-        inv[pv] = np.arange(len(pv))
-        from meshrepair._kernels import renumbered_faces
-        from meshrepair.mesh.topology import permuted_topology
-
+        pv, pf, inv, Fw, topo_w = _once(memo, "reorder", lambda: reordered(Vs, F, topo))
         V_pv = V[pv]  # (read only: shared by the fidelity data and the readings below)
-        Fw, Vw, Vd = renumbered_faces(F, inv, pf), Vs[pv], V_pv
-        topo_w = permuted_topology(topo, inv, pf, Fw)
+        Vw, Vd = Vs[pv], V_pv
     else:
         Fw, Vw, Vd, topo_w = F, Vs, V, topo
     Vd = fidelity_data(Vd, Vw, impulsive)
@@ -191,7 +179,8 @@ def _plan_one(V, F, *, lam, th, a, robust_iters, feature_iters, mask_update_ever
         n1 = int(min(stages[0].max_iter, PROBE_MAX_ITERS))
         st1 = replace(stages[0], max_iter=n1, min_iter=min(stages[0].min_iter, n1))
         # the probe is one stage: its switch rule, in edge units, is the stop rule
-        q_edges = _sf.radius_in_edges(V, F, topo.edges)  # the mesh's radius in edge lengths
+        # the mesh's radius in edge lengths
+        q_edges = _once(memo, "radius", lambda: _sf.radius_in_edges(V, F, topo.edges))
         kw1 = {**opts_kw, "tol": _sf.probe_tol(st1, q_edges) if PROBE_EARLY_STOP else tol}
         Vn_w = V_pv if reorder else V
         # the tangential ratio's vertices
@@ -208,8 +197,8 @@ def _plan_one(V, F, *, lam, th, a, robust_iters, feature_iters, mask_update_ever
 
         r1 = run_probe(kw1) if probe_result is None else probe_result
         first_probe = r1  # the one probe of the call, shared by both noise models' plans
-        tr = tangential_ratio(Vt_w, Fw, r1.V, topo=topo_w)
-        ns = noise_scale(Vn_w, Fw, reference=r1.V, topo=topo_w)
+        tr = _once(memo, "tangential", lambda: tangential_ratio(Vt_w, Fw, r1.V, topo=topo_w))
+        ns = _once(memo, "scale", lambda: noise_scale(Vn_w, Fw, reference=r1.V, topo=topo_w))
         if willmore_weight is None:
             ww = 1.0 if white else _clp.keep_white(
                 willmore_weight_from_scale(ns.rho, impulsive, tr), capped)
@@ -227,7 +216,8 @@ def _plan_one(V, F, *, lam, th, a, robust_iters, feature_iters, mask_update_ever
             opts_kw["inner_iters"] = inner_iters
         r1_V = r1.V[inv] if reorder else r1.V
         cs = getattr(r1, "crease_support", None)  # the gate's read on these normals
-        sup, net = cs if cs is not None else _cn.supported(topo_w, r1.N, th=th)
+        sup, net = cs if cs is not None else _once(memo, "support", lambda: _cn.supported(
+            topo_w, r1.N, th=th))
         info.update(network_branching=net.branching, network_side_spread=net.side_spread,
                     network_dropped=net.dropped, network_rejected=net.rejected)
         force = np.where(sup, -1, 0).astype(np.int8)
@@ -235,7 +225,8 @@ def _plan_one(V, F, *, lam, th, a, robust_iters, feature_iters, mask_update_ever
         sup_v[topo_w.edges[sup].ravel()] = True
         if reorder:
             sup_v = sup_v[inv]
-        flat = flat_edges(topo_w, r1.N, sup, max_spread=FLAT_SPREAD_DEFAULT)
+        flat = _once(memo, "flat", lambda: flat_edges(topo_w, r1.N, sup,
+                                                       max_spread=FLAT_SPREAD_DEFAULT))
         if tr < TANGENTIAL_MAX and sup.any():  # noise along the normals: anchor the CAD region
             anchor = np.zeros(len(V))
             anchor[topo_w.edges[sup].ravel()] = 1.0
@@ -244,7 +235,8 @@ def _plan_one(V, F, *, lam, th, a, robust_iters, feature_iters, mask_update_ever
                             f"{TANGENTIAL_MAX:g})",
                             {"tangential_ratio": tr, "crease_edges": float(sup.sum())}))
         info["tangential_ratio"] = tr
-        sf = _sf.cad_support(topo_w, r1.N, sup, q_edges, th=th)  # scale-free CAD support
+        sf = _once(memo, "cad", lambda: _sf.cad_support(  # scale-free CAD support
+            topo_w, r1.N, sup, q_edges, th=th))
         if n_unf and Vd is Vw and not unfolded_data_after_probe(impulsive, tr, sf):
             Vd, Vi = Vn_w, Vw  # noise with a tangential part: the input is the main run's data
         sf_read = sf
@@ -265,7 +257,8 @@ def _plan_one(V, F, *, lam, th, a, robust_iters, feature_iters, mask_update_ever
         from meshrepair.denoise import organic_fidelity as _of
 
         if lam is None and _of.applies(sf, ww, w_out, impulsive, ns.rho):
-            g_relief = noise_statistics(r1.V, Fw, topo_w)[0]  # the probe keeps the relief
+            g_relief = _once(memo, "relief", lambda: noise_statistics(  # the probe keeps
+                r1.V, Fw, topo_w)[0])  # the relief
             info["gamma_relief"] = g_relief
             sigma = _of.noise_level(gamma, g_relief)
             lam_used = _of.main_lambda(sigma, tr, info, graded=not presmoothed)
@@ -341,6 +334,18 @@ def _plan_one(V, F, *, lam, th, a, robust_iters, feature_iters, mask_update_ever
         polish=options["polish"], decisions=tuple(dec), inner=inner_plan, _state=st)
     st.planned = planned_values(plan)  # what the executor compares a user's edits against
     return plan
+
+
+def _once(memo: dict | None, key: str, read):
+    """``read()``, computed once per :func:`_plan` call: the plans it makes of one input (the
+    white and the correlated model's, the CAD and the organic reading's) read the same arrays
+    and the same probe, so each reading is a pure function of what the first plan read.
+    ``memo=None``: always computed."""
+    if memo is None:
+        return read()
+    if key not in memo:
+        memo[key] = read()
+    return memo[key]
 
 
 def _plan_presmooth(V, F, st: _State, options: dict, *, capped_run: bool, dec: list):

@@ -21,6 +21,22 @@ tangential error in; with thrown vertices the unfolded positions are nearer the 
 input (docs/parameters.md)."""
 
 
+def unfolded_input(V: np.ndarray, topo) -> tuple[np.ndarray, int]:
+    """``(Vs, n)``: the input with its ``n`` folded-over faces untangled (``V`` when none)."""
+    import logging
+
+    from meshrepair.model.relax import locally_flipped_faces
+
+    flipped = locally_flipped_faces(V, topo)
+    n_unf = int(flipped.sum())
+    if not n_unf:
+        return V, 0
+    Vs, left = untangle(V, topo, flipped=flipped)
+    logging.getLogger("meshrepair.denoise.run").info(
+        "unfolded %d folded-over faces (%d left)", n_unf - left, left)
+    return Vs, n_unf
+
+
 def fidelity_data(V_input: np.ndarray, V_unfolded: np.ndarray, impulsive: bool) -> np.ndarray:
     """Data ``V⁰`` of the fidelity term: the input, or the unfolded mesh for impulsive noise
     (see :data:`UNFOLD_DATA_IMPULSIVE`)."""

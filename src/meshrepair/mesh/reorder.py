@@ -26,6 +26,19 @@ def locality_order(V: np.ndarray, F: np.ndarray) -> tuple[np.ndarray, np.ndarray
     return pv, pf
 
 
+def reordered(Vs: np.ndarray, F: np.ndarray, topo) -> tuple:
+    """The Morton order of a large mesh: ``(pv, pf, inv, Fw, topo_w)``, vertex and face
+    permutations, the inverse vertex permutation, the renumbered faces and their topology."""
+    from meshrepair._kernels import renumbered_faces
+    from meshrepair.mesh.topology import permuted_topology
+
+    pv, pf = locality_order(Vs, F)
+    inv = np.empty_like(pv)
+    inv[pv] = np.arange(len(pv))
+    Fw = renumbered_faces(F, inv, pf)
+    return pv, pf, inv, Fw, permuted_topology(topo, inv, pf, Fw)
+
+
 def _edge_values_to(topo, topo_w, pf: np.ndarray, values: np.ndarray) -> np.ndarray:
     """Re-index per-edge ``values`` of the reordered mesh ``topo_w`` (its face m is face
     ``pf[m]`` of ``topo``, corners in the same order) onto ``topo.edges``, through the face-edge
