@@ -131,3 +131,38 @@ def test_the_plans_of_one_input_read_it_once(cad_case, monkeypatch):
     # noise_statistics: the input's level, and the probe's relief level of the organic law
     assert calls == {"noise_statistics": 2, "tangential_ratio": 1, "noise_scale": 1,
                      "flat_edges": 1}
+
+
+def test_a_white_cad_residual_with_a_failed_discrepancy_test_costs_one_more_solve(
+        cad_case, monkeypatch):
+    Y, F = cad_case
+    p = mr.plan_denoise(Y, F)
+    monkeypatch.setattr(dq, "accept_weight", lambda q, tol=dq.DISCREPANCY_TOL: False)
+    _rho_sequence(monkeypatch, [-0.05])
+    r = mr.denoise(Y, F, plan=p)
+    assert r.params["structure_test"] == "CAD part" and r.params["main_solves"] == 2
+    assert r.params["outside_weight"] == dq.FALLBACK_WEIGHTS[0]
+
+
+def test_a_result_that_removed_shape_fails_the_test_and_one_that_removed_noise_passes():
+    """The test's premise on an analytic case: on a sphere with white noise along the normals,
+    the truth as the result leaves the noise (ρ₁ near 0: passes); a result that flattened the
+    curvature into facets (every vertex projected on the nearest face plane of a coarse
+    icosahedral sphere, up to 0.86 l̄ deep) leaves those caps in the residual (fails)."""
+    import trimesh
+
+    from meshrepair.mesh.topology import edge_topology
+    from meshrepair.model.noise import noise_statistics
+
+    s = trimesh.creation.icosphere(subdivisions=4)
+    V, F = np.asarray(s.vertices, np.float64), np.asarray(s.faces, np.int64)
+    Y = mr.add_noise(V, F, 0.2, seed=3)
+    topo = edge_topology(F, len(V))
+    gamma = noise_statistics(Y, F, topo)[0]
+    assert whiteness.white_residual(Y, V, F, topo.edges, gamma).rho1 <= whiteness.RHO1_MAX
+    c = trimesh.creation.icosphere(subdivisions=1)
+    n = np.asarray(c.face_normals)
+    d = np.einsum("ij,ij->i", n, np.asarray(c.vertices)[c.faces[:, 0]])
+    k = np.argmax(V @ n.T, axis=1)
+    facets = V * (d[k] / np.einsum("ij,ij->i", V, n[k]))[:, None]
+    assert whiteness.white_residual(Y, facets, F, topo.edges, gamma).rho1 > whiteness.RHO1_MAX

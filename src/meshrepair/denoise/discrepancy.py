@@ -86,3 +86,12 @@ def applies(gamma: float, gamma_rms: float) -> bool:
 def accept_weight(ratio: float, tol: float = DISCREPANCY_TOL) -> bool:
     """The discrepancy test ``q ≤ 1 + ε``; an undefined ratio (NaN) accepts."""
     return not (ratio > 1.0 + tol)
+
+
+def lowered_weight(ratio: float) -> float | None:
+    """The one lowered outside weight a call that already made its other main solve affords
+    (the first of :data:`FALLBACK_WEIGHTS`) when the ratio read on its first solve fails
+    :func:`accept_weight`; None when it passes (or no weight is listed)."""
+    if accept_weight(ratio) or not FALLBACK_WEIGHTS:
+        return None
+    return FALLBACK_WEIGHTS[0]

@@ -271,8 +271,7 @@ def _execute_tested(plan: DenoisePlan, V, F, callback, made_here: bool = False
              t.level_ratio, "white" if t.white else "correlated")
     n_white = r.params["main_solves"]
     q = r.params["discrepancy_ratio"]
-    lowered = (None if _dq.accept_weight(q) or not _dq.FALLBACK_WEIGHTS
-               else _dq.FALLBACK_WEIGHTS[0])  # the one further solve a call affords
+    lowered = _dq.lowered_weight(q)  # the one further solve a call affords
     done = r.stop_reason == "interrupted"  # a user's stop: the white result is the answer
     if not done and not t.white:
         r = _execute(plan.if_correlated, V, F, callback, made_here=made_here,

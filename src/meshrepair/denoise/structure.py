@@ -96,8 +96,7 @@ def execute_structured(plan: DenoisePlan, V, F, callback, made_here: bool,
         if rho_org <= RHO1_MAX:
             r, kept = ro, "organic"
         r.params["main_solves"] = n_total
-    elif not done and not _dq.accept_weight(q) and _dq.FALLBACK_WEIGHTS:
-        lowered = _dq.FALLBACK_WEIGHTS[0]
+    elif not done and (lowered := _dq.lowered_weight(q)) is not None:
         log.info("outside weight lowered to %g (discrepancy ratio %.3f)", lowered, q)
         r = execute(pc, V, F, callback, made_here=made_here, outside=lowered)
         r.params["main_solves"] += n_first
