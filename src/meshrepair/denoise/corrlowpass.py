@@ -44,17 +44,21 @@ minus the
 probe's result, white-normalised). Where branch 1 does not fire, on the same organic,
 non-impulsive meshes, the step also runs when
 
-.. math:: γ̂ > γ_1 = 0.13, \\qquad β ≥ β_0 = 1.2, \\qquad τ < τ_0 = 0.45,
+.. math:: γ̂ > γ_1 = 0.13, \\qquad m̂ ≥ 1, \\qquad τ < τ_0 = 0.45,
 
-with ``k = clip(round((ℓ_β γ̂ / γ_q)²), 0, K_max)``, ``ℓ_β = √m̂`` the band read's own length
-(the ``m`` whose white-model ratio ``β(m)`` is nearest). ``β₀ = 1.2`` is the model's ``β(1)``
-(white noise along the normals reads 0.96-1.07 at ``γ̂ > 0.13`` on the benchmark meshes, m = 2
-fields 1.24-1.39); ``τ < τ₀`` keeps noise in random directions out (it raises ``β`` too, through
+with ``k = clip(round((ℓ_β γ̂ / γ_q)²), 0, K_max)``, ``ℓ_β = √m̂`` the band read's own length:
+``m̂`` is the ``m`` whose white-model ratio ``β(m)`` is nearest to the measured ``β`` in log
+(:func:`meshrepair.denoise.corrwhite.band_read`, the models made on the mesh itself). The
+correlation test and the length are one read: the step runs when the noise is nearer a field of
+one diffusion step or more than white noise, ``β ≥ (β(0) β(1))^{1/2}`` (≈ 1.10 on a regular
+grid, where ``β(1) = 1.22``), and a read of ``m̂ = 0`` gives ``k = 0`` by itself. White noise
+along the normals reads β 0.96-1.07 at ``γ̂ > 0.13`` on the benchmark meshes, m = 2 fields
+1.16-1.39; ``τ < τ₀`` keeps noise in random directions out (it raises ``β`` too, through
 its tangential part: 1.26-1.50, but reads τ ≥ 0.58, the m = 2 fields ≤ 0.27); ``γ₁`` keeps low
 white noise out, where the relief's cross terms dominate ``b_1`` (γ = 0.1 rows read γ̂ 0.08-0.12
-and β up to 1.40; m = 2 fields at γ ≥ 0.3 read γ̂ ≥ 0.15). Chosen on the benchmark grid
-(docs/parameters.md). The band read costs a few sparse products and is computed only where the
-other conditions of branch 2 hold.
+and β up to 1.40; m = 2 fields at γ ≥ 0.3 read γ̂ ≥ 0.15). ``γ_1`` and ``τ_0`` were chosen on
+the benchmark grid (docs/parameters.md). The band read costs a few sparse products and is
+computed only where the other conditions of branch 2 hold.
 """
 
 from __future__ import annotations
@@ -68,7 +72,6 @@ GAMMA_Q = 0.02
 MAX_STEPS = 160
 CORR_WHITE = True  # branch 2: correlated noise that reads white
 GAMMA_1 = 0.13
-BETA_0 = 1.2
 TAU_0 = 0.45
 
 
@@ -88,13 +91,14 @@ def band_gate(gamma: float, *, support_fraction: float, outside: float,
                 and gamma > GAMMA_1)
 
 
-def white_steps(gamma: float, beta: float, tau: float, length: float) -> int:
-    """Branch 2: ``k = clip(round((ℓ_β γ̂/γ_q)²), 0, K_max)`` when ``γ̂ > γ_1``, ``β ≥ β_0``
-    and ``τ < τ_0`` (module docstring); 0 otherwise (NaN never fires)."""
-    vals = (gamma, beta, tau, length)
+def white_steps(gamma: float, tau: float, length: float) -> int:
+    """Branch 2: ``k = clip(round((ℓ_β γ̂/γ_q)²), 0, K_max)`` when ``γ̂ > γ_1`` and ``τ < τ_0``
+    (module docstring), with ``ℓ_β = √m̂`` the band read's length (0 for a read nearest white
+    noise, which gives ``k = 0``); 0 otherwise (NaN never fires)."""
+    vals = (gamma, tau, length)
     if not CORR_WHITE or not all(np.isfinite(v) for v in vals):
         return 0
-    if not (gamma > GAMMA_1 and beta >= BETA_0 and tau < TAU_0):
+    if not (gamma > GAMMA_1 and tau < TAU_0):
         return 0
     return int(np.clip(round((float(length) * float(gamma) / GAMMA_Q) ** 2), 0, MAX_STEPS))
 
@@ -155,7 +159,7 @@ def apply(V_out: np.ndarray, F: np.ndarray, topo, gamma: float, info: dict,
 
         br = band_read(V_in, F, reference=probe, topo=topo)
         info.update(band_beta=br.beta, band_tau=br.tau, band_length=br.length)
-        k = white_steps(gamma, br.beta, br.tau, br.length)
+        k = white_steps(gamma, br.tau, br.length)
     info["corr_lowpass_steps"] = k
     return corr_lowpass(V_out, F, topo, k) if k else V_out
 
