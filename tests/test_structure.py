@@ -56,13 +56,22 @@ def _rho_sequence(monkeypatch, values):
     monkeypatch.setattr(whiteness, "white_residual", fake)
 
 
-def test_a_white_cad_residual_keeps_the_cad_result_in_one_solve(cad_case, monkeypatch):
+def _white_cad_run(cad_case, monkeypatch, discrepancy_passes: bool):
+    """The CAD plan and its result when the CAD residual reads white (ρ₁ −0.05) and the
+    discrepancy test of the outside weight passes or fails."""
     Y, F = cad_case
     p = mr.plan_denoise(Y, F)
-    monkeypatch.setattr(dq, "accept_weight", lambda q, tol=dq.DISCREPANCY_TOL: True)
+    monkeypatch.setattr(dq, "accept_weight",
+                        lambda q, tol=dq.DISCREPANCY_TOL: discrepancy_passes)
     _rho_sequence(monkeypatch, [-0.05])
     r = mr.denoise(Y, F, plan=p)
-    assert r.params["structure_test"] == "CAD part" and r.params["main_solves"] == 1
+    assert r.params["structure_test"] == "CAD part"
+    return Y, F, p, r
+
+
+def test_a_white_cad_residual_keeps_the_cad_result_in_one_solve(cad_case, monkeypatch):
+    Y, F, p, r = _white_cad_run(cad_case, monkeypatch, discrepancy_passes=True)
+    assert r.params["main_solves"] == 1
     alone = mr.denoise(Y, F, plan=dataclasses.replace(p, if_structured=None))
     np.testing.assert_array_equal(r.V, alone.V)
 
@@ -135,12 +144,8 @@ def test_the_plans_of_one_input_read_it_once(cad_case, monkeypatch):
 
 def test_a_white_cad_residual_with_a_failed_discrepancy_test_costs_one_more_solve(
         cad_case, monkeypatch):
-    Y, F = cad_case
-    p = mr.plan_denoise(Y, F)
-    monkeypatch.setattr(dq, "accept_weight", lambda q, tol=dq.DISCREPANCY_TOL: False)
-    _rho_sequence(monkeypatch, [-0.05])
-    r = mr.denoise(Y, F, plan=p)
-    assert r.params["structure_test"] == "CAD part" and r.params["main_solves"] == 2
+    r = _white_cad_run(cad_case, monkeypatch, discrepancy_passes=False)[3]
+    assert r.params["main_solves"] == 2
     assert r.params["outside_weight"] == dq.FALLBACK_WEIGHTS[0]
 
 

@@ -7,9 +7,13 @@ Used by :func:`meshrepair.denoise` (which re-exports these names).
 
 from __future__ import annotations
 
+import logging
+
 import numpy as np
 
-from meshrepair.model.relax import untangle
+from meshrepair.model.relax import locally_flipped_faces, untangle
+
+log = logging.getLogger("meshrepair.denoise.run")
 
 UNFOLD_DATA_IMPULSIVE = True
 """Where the input had folded faces, the unfolded mesh (:func:`meshrepair.model.relax.untangle`) is
@@ -23,17 +27,12 @@ input (docs/parameters.md)."""
 
 def unfolded_input(V: np.ndarray, topo) -> tuple[np.ndarray, int]:
     """``(Vs, n)``: the input with its ``n`` folded-over faces untangled (``V`` when none)."""
-    import logging
-
-    from meshrepair.model.relax import locally_flipped_faces
-
     flipped = locally_flipped_faces(V, topo)
     n_unf = int(flipped.sum())
     if not n_unf:
         return V, 0
     Vs, left = untangle(V, topo, flipped=flipped)
-    logging.getLogger("meshrepair.denoise.run").info(
-        "unfolded %d folded-over faces (%d left)", n_unf - left, left)
+    log.info("unfolded %d folded-over faces (%d left)", n_unf - left, left)
     return Vs, n_unf
 
 
@@ -145,8 +144,6 @@ def unfold_result(V_out: np.ndarray, topo, V_ref: np.ndarray | None = None
     V : (nV, 3) float64, a new array (``V_out`` itself when nothing is folded)
     n_folded : int, faces folded in ``V_out``
     """
-    from meshrepair.model.relax import locally_flipped_faces
-
     n = int(locally_flipped_faces(V_out, topo).sum())
     if n == 0:
         return V_out, 0
