@@ -46,6 +46,7 @@ TIMED = (
     ("meshrepair.mesh.validate", "_check_mesh", "validation + topology (_check_mesh)"),
     ("meshrepair.denoise.analysis", "noise_statistics", "noise level γ̂, γ̂_rms"),
     ("meshrepair.model.relax", "locally_flipped_faces", "fold-over check + untangle"),
+    ("meshrepair.denoise.folds", "locally_flipped_faces", "fold-over check + untangle"),
     ("meshrepair.denoise.folds", "untangle", "fold-over check + untangle"),
     ("meshrepair.mesh.reorder", "locality_order", "Morton order + reordered topology"),
     ("meshrepair.mesh.topology", "edge_topology", "Morton order + reordered topology"),
