@@ -19,6 +19,7 @@ from meshrepair.denoise import crease_network as _cn
 from meshrepair.denoise import scalefree as _sf
 from meshrepair.denoise import structure as _structure
 from meshrepair.denoise.checks import _checked
+from meshrepair.denoise.corrwhite import BandRead, band_read
 from meshrepair.denoise.folds import fidelity_data, unfolded_data_after_probe, unfolded_input
 from meshrepair.denoise.plan import Decision, DenoisePlan, _State, mesh_key, planned_values
 from meshrepair.denoise.regions import flat_edges
@@ -42,6 +43,7 @@ from meshrepair.denoise.rules import (
     robust_a_from_noise,
     robust_iters_from_noise,
     warm_start_from_probe,
+    willmore_weight_from_band,
     willmore_weight_from_scale,
 )
 from meshrepair.denoise.scale import noise_scale, tangential_ratio
@@ -62,7 +64,8 @@ coordinate-dependent ordering, which keeps the rotation test exact to rounding).
 def _plan(V, F, *, digest: bool = True, probe_result=None, **options) -> DenoisePlan:
     """Read ``(V, F)`` and decide (module docstring); returns the plan, runs no main solve.
 
-    When the reading finds correlated noise (an automatic Willmore weight above 1), the plan is
+    When the reading finds correlated noise (an automatic Willmore weight above 1: the
+    profile's, or where the profile reads white the band read's, :func:`_band`), the plan is
     the white-noise model's, read from the same probe, and carries the correlated-noise model's
     plan in ``if_correlated``: the executor runs the white model first and the correlated one
     only when the white result's residual fails the white-noise test of
@@ -75,15 +78,22 @@ def _plan(V, F, *, digest: bool = True, probe_result=None, **options) -> Denoise
     memo: dict = {}  # the readings of this input, shared by the plans made here
     p = _plan_one(V, F, digest=digest, probe_result=probe_result, memo=memo, **options)
     first, p._state.first_probe = p._state.first_probe, None
-    if p.willmore_weight <= 1.0 or options.get("willmore_weight") is not None:
+    auto = options.get("willmore_weight") is None
+    band = _band(V, F, p, memo) if auto and p.willmore_weight <= 1.0 else None
+    if not auto or (p.willmore_weight <= 1.0 and band is None):
         if not _structure.applies(p, options):
             return p
         po = _plan_one(V, F, digest=digest, **options, organic=True, probe_result=first,
                        memo=memo)
         po._state.first_probe = None
         return replace(p, if_structured=po)
-    pw = _plan_one(V, F, digest=digest, **options, white=True, probe_result=first, memo=memo)
-    pw._state.first_probe = None
+    if band is not None:  # the profile reads white noise, the band read correlated noise
+        pw, p = p, _plan_one(V, F, digest=digest, **options, probe_result=first, memo=memo,
+                             band=band)
+    else:
+        pw = _plan_one(V, F, digest=digest, **options, white=True, probe_result=first,
+                       memo=memo)
+    pw._state.first_probe = p._state.first_probe = None
     from meshrepair.denoise.whiteness import LEVEL_MAX, RHO1_MAX
 
     dec = Decision("noise_model", "white, tested",
@@ -101,12 +111,14 @@ def _plan_one(V, F, *, lam, th, a, robust_iters, feature_iters, mask_update_ever
               presmoothed: bool = False, read_from: np.ndarray | None = None,
               capped: bool = False, white: bool = False, organic: bool = False,
               probe_result=None, digest: bool = True,
-              memo: dict | None = None) -> DenoisePlan:
+              memo: dict | None = None, band: BandRead | None = None) -> DenoisePlan:
     """One noise model's plan: the white model's with ``white`` (Willmore weight 1), else the
     reading's; with ``organic``, the crease support is not taken as a CAD part (the organic
     alternative of :mod:`meshrepair.denoise.structure`); ``probe_result`` is a probe already
     run on this input (not run again); ``memo``: the readings of an earlier plan of the same
-    input and probe (:func:`_once`), read from there instead of again."""
+    input and probe (:func:`_once`), read from there instead of again; ``band``: the band read
+    of correlated noise that the profile reads white (:func:`_band`), whose weight the plan
+    takes."""
     from meshrepair.mesh.validate import _check_mesh
 
     options = _checked(lam, th, a, robust_iters, feature_iters, mask_update_every,
@@ -204,13 +216,18 @@ def _plan_one(V, F, *, lam, th, a, robust_iters, feature_iters, mask_update_ever
                 willmore_weight_from_scale(ns.rho, impulsive, tr), capped)
         rule = (f"willmore_weight_from_scale: clip(1 + 150 (ρ − 1.12), 1, 16) for noise "
                 f"along the normals (r_t < {TANGENTIAL_MAX:g}), not impulsive; else 1")
+        reads = {"rho": ns.rho, "tangential_ratio": tr, "impulsive": float(impulsive)}
+        if band is not None and willmore_weight is None:
+            ww = willmore_weight_from_band(band.steps)
+            rule = ("willmore_weight_from_band: clip(4 m̂, 1, 16), the profile reading white "
+                    "noise and the two-octave band read m̂ ≥ 1 diffusion steps (band_correlated, "
+                    "corrlowpass.py)")
+            reads.update(band_beta=band.beta, band_tau=band.tau, band_steps=band.steps)
         if white:
             rule = ("the white-noise model, tried first when the reading finds correlated "
                     "noise (noise_model)")
         dec.append(Decision("willmore_weight", ww, "set by the user" if willmore_weight
-                            is not None else rule, {"rho": ns.rho, "tangential_ratio": tr,
-                                                    "impulsive": float(impulsive)},
-                            willmore_weight is not None))
+                            is not None else rule, reads, willmore_weight is not None))
         if auto_inner and ww > 1.0:  # correlated noise: more V-steps for its long waves
             inner_iters = inner_iters_from_scale(ns.length)  # (the probe is not run again)
             opts_kw["inner_iters"] = inner_iters
@@ -294,7 +311,7 @@ def _plan_one(V, F, *, lam, th, a, robust_iters, feature_iters, mask_update_ever
                 sup_v=sup_v, r1=r1, r1_V=r1_V, info=info, auto_robust=auto_robust,
                 auto_inner=auto_inner, robust_iters=int(robust_iters), probe=bool(probe),
                 presmoothed=bool(presmoothed), mesh_key=mesh_key(V, F) if digest else "",
-                first_probe=first_probe)
+                first_probe=first_probe, band=band)
     kp = 0
     inner_plan = None
     if sup_v is not None and willmore_weight is None and lam is None and not presmoothed:
@@ -334,6 +351,28 @@ def _plan_one(V, F, *, lam, th, a, robust_iters, feature_iters, mask_update_ever
         polish=options["polish"], decisions=tuple(dec), inner=inner_plan, _state=st)
     st.planned = planned_values(plan)  # what the executor compares a user's edits against
     return plan
+
+
+def _band(V, F, p: DenoisePlan, memo: dict) -> BandRead | None:
+    """The band read of :mod:`meshrepair.denoise.corrwhite` on the input against the probe's
+    result, where branch 2 of :mod:`meshrepair.denoise.corrlowpass` needs it (an organic mesh,
+    not impulsive, ``γ̂ > γ_1``) and the plan has no coarse-to-fine run (that run's own plan
+    reads its low-passed input). It is kept on ``p`` (its low-pass reads it after the solve);
+    returned when it reads correlated noise (:func:`~meshrepair.denoise.corrlowpass.
+    band_correlated`), else ``None``."""
+    from meshrepair.denoise import corrlowpass as _cl
+
+    st = p._state
+    if st is None or st.r1_V is None or st.presmooth is not None:
+        return None
+    kw = dict(support_fraction=st.info["support_fraction"], outside=p.outside_weight,
+              impulsive=st.impulsive)
+    if not _cl.band_gate(st.gamma, **kw):
+        return None
+    st.band = _once(memo, "band", lambda: band_read(V, F, reference=st.r1_V, topo=st.topo))
+    b = st.band
+    log.info("band read: beta %.3f, tau %.3f, %d diffusion steps", b.beta, b.tau, b.steps)
+    return b if _cl.band_correlated(st.gamma, b.tau, b.steps) else None
 
 
 def _once(memo: dict | None, key: str, read):

@@ -59,6 +59,14 @@ white noise out, where the relief's cross terms dominate ``b_1`` (γ = 0.1 rows 
 and β up to 1.40; m = 2 fields at γ ≥ 0.3 read γ̂ ≥ 0.15). ``γ_1`` and ``τ_0`` were chosen on
 the benchmark grid (docs/parameters.md). The band read costs a few sparse products and is
 computed only where the other conditions of branch 2 hold.
+
+**The same read chooses the noise model.** Where branch 2's reading holds
+(:func:`band_correlated`) the plan also carries a correlated-noise model of weight
+``w = clip(4 m̂, 1, 16)`` (:func:`meshrepair.denoise.rules.willmore_weight_from_band`), run when
+the white model's result fails the white-noise test of :mod:`meshrepair.denoise.whiteness`.
+The white result is the one low-passed here, so its residual holds the noise's longer waves
+and fails the test where the read is right; where the low-pass removed relief instead, the
+residual is the input's white noise and the white result is kept.
 """
 
 from __future__ import annotations
@@ -89,6 +97,16 @@ def band_gate(gamma: float, *, support_fraction: float, outside: float,
     """Whether branch 2 needs the band read at all (organic, not impulsive, ``γ̂ > γ_1``)."""
     return bool(CORR_WHITE and _organic(gamma, support_fraction, outside, impulsive)
                 and gamma > GAMMA_1)
+
+
+def band_correlated(gamma: float, tau: float, steps: int) -> bool:
+    """Branch 2's reading of correlated noise: ``γ̂ > γ_1``, ``τ < τ_0`` and a band read
+    nearest a model of ``m̂ ≥ 1`` diffusion steps (module docstring; NaN never fires). The
+    same reading gives the plan its correlated-noise model
+    (:func:`meshrepair.denoise.rules.willmore_weight_from_band`)."""
+    if not CORR_WHITE or not all(np.isfinite(v) for v in (gamma, tau)):
+        return False
+    return bool(gamma > GAMMA_1 and tau < TAU_0 and steps >= 1)
 
 
 def white_steps(gamma: float, tau: float, length: float) -> int:
@@ -144,11 +162,13 @@ def corr_lowpass(V: np.ndarray, F: np.ndarray, topo, steps: int) -> np.ndarray:
 
 def apply(V_out: np.ndarray, F: np.ndarray, topo, gamma: float, info: dict,
           impulsive: bool, V_in: np.ndarray | None = None,
-          probe: np.ndarray | None = None) -> np.ndarray:
+          probe: np.ndarray | None = None, band=None) -> np.ndarray:
     """The rule on ``denoise``'s result from the first run's readings in ``info``; records
     ``corr_lowpass_steps`` (and branch 2's ``band_beta``, ``band_tau``, ``band_length``, NaN
     where the band read was not needed) in ``info`` and returns the (new or same) vertices.
-    ``V_in`` (the input) and ``probe`` (the probe's result) feed branch 2's band read."""
+    ``V_in`` (the input) and ``probe`` (the probe's result) feed branch 2's band read;
+    ``band``: that read, already made by the plan (:func:`meshrepair.denoise.corrwhite.band_read`
+    of the same input and probe), used instead of reading again."""
     kw = dict(support_fraction=info.get("support_fraction", float("nan")),
               outside=info.get("outside_weight", 1.0), impulsive=impulsive)
     k = corr_steps(gamma, info.get("noise_rho", float("nan")),
@@ -157,7 +177,7 @@ def apply(V_out: np.ndarray, F: np.ndarray, topo, gamma: float, info: dict,
     if not k and V_in is not None and probe is not None and band_gate(gamma, **kw):
         from meshrepair.denoise.corrwhite import band_read
 
-        br = band_read(V_in, F, reference=probe, topo=topo)
+        br = band if band is not None else band_read(V_in, F, reference=probe, topo=topo)
         info.update(band_beta=br.beta, band_tau=br.tau, band_length=br.length)
         k = white_steps(gamma, br.tau, br.length)
     info["corr_lowpass_steps"] = k

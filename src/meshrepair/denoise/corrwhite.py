@@ -43,7 +43,12 @@ reads ≈ 1 for isotropic noise (two tangential components each as large as the 
 in both ``t(V)`` and ``t(R)`` and cancels. On the benchmark grid (docs/parameters.md) m = 2
 fields read τ ≤ 0.27, random-direction white noise at ``γ̂ > 0.13`` τ ≥ 0.58.
 
-The gate that uses this read is :func:`meshrepair.denoise.corrlowpass.corr_steps` (its branch 2).
+Two decisions use this read, both through
+:func:`meshrepair.denoise.corrlowpass.band_correlated`: the plan's correlated-noise model
+(:func:`meshrepair.denoise.rules.willmore_weight_from_band`, tested against the white model by
+:mod:`meshrepair.denoise.whiteness`) and branch 2 of the correlated low-pass
+(:func:`meshrepair.denoise.corrlowpass.white_steps`). The plan reads it once, against the
+probe's result, and the low-pass reuses that read.
 """
 
 from __future__ import annotations

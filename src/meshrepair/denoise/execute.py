@@ -168,7 +168,8 @@ def _execute(plan: DenoisePlan, V, F, callback=None, *, made_here: bool = False,
                           polish=plan.polish, info=info, probe=r1_V,
                           lowpassed=st.presmoothed,
                           lowpassed_from=st.lowpassed_from,
-                          lam_set=o["lam"] is not None)
+                          lam_set=o["lam"] is not None,
+                          band_model=st.band is not None and ww > 1.0)
     n_res_folded = 0
     if o["unfold"] and UNFOLD_RESULT and not (info["reintegrate_steps"]
                                               and REINTEGRATE_KEEPS_FOLDS and not impulsive):
@@ -181,7 +182,7 @@ def _execute(plan: DenoisePlan, V, F, callback=None, *, made_here: bool = False,
             and not st.presmoothed):
         from meshrepair.denoise import corrlowpass as _cl
 
-        V_out = _cl.apply(V_out, F, topo, gamma, info, impulsive, V, r1_V)
+        V_out = _cl.apply(V_out, F, topo, gamma, info, impulsive, V, r1_V, band=st.band)
     params = {"lam": lam_used, "th": o["th"], "a": o["a"], "robust_iters": robust_iters,
               "feature_iters": o["feature_iters"], "mask_update_every": o["mask_update_every"],
               "min_feature_edges": o["min_feature_edges"], "tol": o["tol"],

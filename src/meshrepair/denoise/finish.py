@@ -134,7 +134,7 @@ def _organic_finish(V_in, V_out, F, topo, M_E, gamma, impulsive, ww, info):
 
 def finish_result(V, V_out, F, topo, M_E, *, data, sup_v, gamma, gamma_rms, impulsive, ww,
                   w_cad, automatic, polish, info, probe=None,
-                  lowpassed=False, lowpassed_from=None, lam_set=False):
+                  lowpassed=False, lowpassed_from=None, lam_set=False, band_model=False):
     """Steps 1-6 of the module docstring on the solve's result ``V_out`` (input order).
 
     Parameters
@@ -153,6 +153,8 @@ def finish_result(V, V_out, F, topo, M_E, *, data, sup_v, gamma, gamma_rms, impu
     lowpassed : ``V`` is the low-passed input ``T^{k_p} y`` of the coarse-to-fine run
     lowpassed_from : ``(y, k_p)`` of that run, or None (no coarse low-pass on a low-passed ``V``)
     lam_set : the user set λ (no coarse low-pass: its length would override that fidelity)
+    band_model : ``ww`` is the band read's correlated model
+        (:func:`meshrepair.denoise.rules.willmore_weight_from_band`; no crease sharpening)
 
     Returns
     -------
@@ -218,7 +220,7 @@ def finish_result(V, V_out, F, topo, M_E, *, data, sup_v, gamma, gamma_rms, impu
             V_out, info["cad_finish_gated"] = cad_finish(V_out, F, M_E, topo, passes=pc)
             info["cad_finish_passes"] = pc
     info.update(sharpened=0.0, sharpen_rho=float("nan"), sharpen_flat=float("nan"))
-    sr = sharpen_rule(ww if automatic else 1.0, info["noise_length"])
+    sr = sharpen_rule(ww if automatic else 1.0, info["noise_length"], band_model=band_model)
     if polish and sr is not None:  # correlated noise: rounded creases, kept where data agree
         from meshrepair.denoise.modes import sharpen
         from meshrepair.denoise.rules import SHARPEN_FLAT_SUPPORT

@@ -196,6 +196,7 @@ class _State:
     first_probe: Any = None
     lowpassed_from: Any = None  # (raw input y, pairs k_p) of a coarse-to-fine run's input
     planned: dict | None = None  # the editable fields as the reading decided them
+    band: Any = None  # the two-octave band read (corrwhite.BandRead), where the plan made it
 
 
 def planned_values(plan: DenoisePlan) -> dict:

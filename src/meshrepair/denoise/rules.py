@@ -111,6 +111,10 @@ def huber_from_noise(gamma_rms: float, impulsive: bool) -> float:
     return 2.0 * gamma_rms if impulsive else 0.0
 
 
+W_FULL = 16.0
+"""The largest automatic Willmore weight (noise correlated over ``ℓ ≥ 2`` rings)."""
+
+
 def willmore_weight_from_scale(rho: float, impulsive: bool = False,
                                tangential: float = 0.0) -> float:
     """Weight ``w`` of edge-Willmore from the noise correlation ratio ρ of
@@ -132,7 +136,22 @@ def willmore_weight_from_scale(rho: float, impulsive: bool = False,
     """
     if impulsive or tangential >= TANGENTIAL_MAX:
         return 1.0
-    return float(np.clip(1.0 + 150.0 * (rho - 1.12), 1.0, 16.0))
+    return float(np.clip(1.0 + 150.0 * (rho - 1.12), 1.0, W_FULL))
+
+
+def willmore_weight_from_band(steps: int) -> float:
+    """Weight ``w`` of edge-Willmore for correlated noise found by the band read of
+    :mod:`meshrepair.denoise.corrwhite` (``m̂`` diffusion steps, correlation length
+    ``ℓ = √m̂``) where the profile of :func:`willmore_weight_from_scale` reads white:
+
+    .. math:: w = \\mathrm{clip}(W_{full}\\, ℓ^2 / 4,\\, 1,\\, W_{full})
+              = \\mathrm{clip}(4 \\hat m,\\, 1,\\, 16).
+
+    The prior smooths the normals over about ``√(w/β2)`` rings, so ``w ∝ ℓ²`` acts at the
+    noise's own length; the constant is the profile rule's: its full weight 16 belongs to noise
+    correlated over ``ℓ = 2`` rings (m = 4).
+    """
+    return float(np.clip(W_FULL * float(steps) / 4.0, 1.0, W_FULL))
 
 
 CAD_SUPPORT = 0.2
@@ -313,7 +332,7 @@ SHARPEN_MAX_RINGS = 14
 about 36 s at r = 17); 14 covers the correlation lengths ℓ ≤ 1.4 of scanner noise."""
 
 
-def sharpen_rule(willmore: float, length: float) -> int | None:
+def sharpen_rule(willmore: float, length: float, *, band_model: bool = False) -> int | None:
     """Whether the result's creases are sharpened (:mod:`meshrepair.denoise.modes`) and over how
     many
     rings ``r`` the mode-seeking neighbourhood reaches:
@@ -328,8 +347,13 @@ def sharpen_rule(willmore: float, length: float) -> int | None:
     ``4 ℓ`` rings reach into it). The data test of :mod:`meshrepair.denoise.sharpen_decision`,
     not the radius, keeps smooth surfaces unchanged: without it the step also moves smooth
     surfaces under synthetic scanner-like noise (docs/parameters.md).
+
+    Not on the band read's correlated model (``band_model``,
+    :func:`willmore_weight_from_band`): that model runs on organic meshes only (crease support
+    below :data:`CAD_SUPPORT`), where there is no crease to restore, and there the data test's
+    margin is thin: on a smooth sphere it keeps mean-shift facets at ``ρ_S`` 0.51-0.53.
     """
-    if not SHARPEN or not willmore > 1.0:
+    if not SHARPEN or band_model or not willmore > 1.0:
         return None
     ell = max(1.0, float(length)) if np.isfinite(length) else 1.0
     return int(min(round(SHARPEN_RINGS * ell), SHARPEN_MAX_RINGS))
