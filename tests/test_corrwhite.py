@@ -100,6 +100,7 @@ def test_band_correlated_gate_and_weight():
     and the weight w = clip(4 m̂, 1, 16) ∝ ℓ², the profile rule's full weight at ℓ = 2."""
     from meshrepair.denoise.rules import (
         W_FULL,
+        sharpen_rule,
         willmore_weight_from_band,
         willmore_weight_from_scale,
     )
@@ -112,8 +113,6 @@ def test_band_correlated_gate_and_weight():
     assert willmore_weight_from_band(4) == W_FULL == willmore_weight_from_scale(1.5)
     for m in (1, 2, 3):  # √(w/β₂) ∝ ℓ = √m below the cap
         assert np.isclose(willmore_weight_from_band(m) / m, W_FULL / 4)
-    from meshrepair.denoise.rules import sharpen_rule
-
     assert sharpen_rule(8.0, 1.41) is not None and sharpen_rule(8.0, 1.41, band_model=True) is None
 
 
@@ -124,6 +123,7 @@ def test_band_model_in_the_plan(monkeypatch, level, seed):
     ``if_correlated`` (weight 4 m̂, no crease sharpening); the band read is made once and
     reused by the low-pass. Measured on this sphere: 23.3 against 47.3 for the white model
     alone (0.4, seed 1), 37.8 against 83.6 (0.5, seed 2)."""
+    import importlib
     from dataclasses import replace
 
     from meshrepair import plan_denoise
@@ -137,8 +137,6 @@ def test_band_model_in_the_plan(monkeypatch, level, seed):
     def counted(*a, **k):
         calls.append(1)
         return real(*a, **k)
-
-    import importlib
 
     monkeypatch.setattr(importlib.import_module("meshrepair.denoise.analysis"), "band_read",
                         counted)
