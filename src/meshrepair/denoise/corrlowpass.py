@@ -113,10 +113,7 @@ def white_steps(gamma: float, tau: float, length: float) -> int:
     """Branch 2: ``k = clip(round((ℓ_β γ̂/γ_q)²), 0, K_max)`` when ``γ̂ > γ_1`` and ``τ < τ_0``
     (module docstring), with ``ℓ_β = √m̂`` the band read's length (0 for a read nearest white
     noise, which gives ``k = 0``); 0 otherwise (NaN never fires)."""
-    vals = (gamma, tau, length)
-    if not CORR_WHITE or not all(np.isfinite(v) for v in vals):
-        return 0
-    if not (gamma > GAMMA_1 and tau < TAU_0):
+    if not (np.isfinite(length) and band_correlated(gamma, tau, round(float(length) ** 2))):
         return 0
     return int(np.clip(round((float(length) * float(gamma) / GAMMA_Q) ** 2), 0, MAX_STEPS))
 
