@@ -191,8 +191,6 @@ INGREDIENTS = [
                "heavy noise", READ, switch="HEAVY_FROM_NETWORK"),
     Ingredient("heavy length", "heavylength.HEAVY_LENGTH: the coarse-to-fine length not read "
                "from the relief", READ, switch="HEAVY_LENGTH"),
-    Ingredient("length check", "lengthcheck.LENGTH_CHECK: no Stein-risk check of that length",
-               READ, switch="LENGTH_CHECK"),
     Ingredient("coarse cap", "coarse_lowpass.COARSE_CAP: the coarse-to-fine length not capped "
                "at the resolution", READ, switch="COARSE_CAP"),
     Ingredient("keep white", "coarse_lowpass.KEEP_WHITE: a capped low-pass does not keep the "

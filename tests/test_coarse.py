@@ -79,7 +79,7 @@ def test_steps_are_the_least_risk_of_the_normals():
     of its normal residual and the probe's trace of L T^k with dense matrices); with k_p pairs
     already applied, the rest of the least-risk length over 0..K_max + k_p. A smooth sphere
     under noise wants a long filter."""
-    from meshrepair.denoise import lengthcheck as lc
+    from meshrepair.denoise import risk as lc
     from meshrepair.denoise.presmooth import presmooth
     from meshrepair.mesh.geometry import vertex_normals
 

@@ -389,10 +389,10 @@ def _once(memo: dict | None, key: str, read):
 
 def _plan_presmooth(V, F, st: _State, options: dict, *, capped_run: bool, dec: list):
     """The coarse-to-fine decision: Taubin pairs ``k`` on the input for heavy noise on an
-    organic mesh (:func:`presmooth_steps`), capped at the mesh's resolution, the length read
-    from the relief and checked by its risk; with ``k > 0`` the plan of the low-passed input."""
+    organic mesh (:func:`presmooth_steps`), capped at the mesh's resolution and shortened
+    where the low-passed input reads relief at the mesh's scale; with ``k > 0`` the plan of the
+    low-passed input."""
     from meshrepair.denoise.heavylength import heavy_length
-    from meshrepair.denoise.lengthcheck import checked_length
     from meshrepair.denoise.presmooth import presmooth, presmooth_steps
 
     info, topo = st.info, st.topo
@@ -412,7 +412,6 @@ def _plan_presmooth(V, F, st: _State, options: dict, *, capped_run: bool, dec: l
     Vk = presmooth(V, topo.edges, np.ones(len(V), bool), kc)
     kp, Vp, hc, hw = heavy_length(V, F, topo.edges, st.gamma, info["tangential_ratio"], kp,
                                   Vk=Vk)
-    kp, Vp, hd = checked_length(V, F, topo.edges, kp, Vp, kc, hw, X_long=Vk)
     log.info("heavy noise on an organic mesh: %d Taubin pairs on the input first", kp)
     from meshrepair.denoise import layoutkeep as _lk
 
@@ -433,11 +432,10 @@ def _plan_presmooth(V, F, st: _State, options: dict, *, capped_run: bool, dec: l
     for q in (inner, inner.if_correlated):  # the raw input, for the final low-pass
         if q is not None and q._state is not None:
             q._state.lowpassed_from = (V, int(kp))
-    st.presmooth = {"Vp": Vp, "steps": int(kp), "roughness": hc, "tangential_weight": hw,
-                    "risk_difference": hd}
+    st.presmooth = {"Vp": Vp, "steps": int(kp), "roughness": hc, "tangential_weight": hw}
     dec.append(Decision("presmooth_steps", int(kp), "presmooth_steps → capped_steps → "
-                        "heavy_length → checked_length: heavy noise on an organic mesh is "
-                        "low-passed first, the whole model then runs on the result",
+                        "heavy_length: heavy noise on an organic mesh is low-passed first, the "
+                        "whole model then runs on the result",
                         {**reads, "steps_after_cap": kc, "roughness": hc,
-                         "tangential_weight": hw, "risk_difference": hd}))
+                         "tangential_weight": hw}))
     return kp, inner

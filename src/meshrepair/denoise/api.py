@@ -41,8 +41,7 @@ correlation or level above the white noise's).
 *Coarse to fine*: heavy white noise on an organic mesh is low-passed first by Taubin λ|μ
 pairs on the input (:mod:`meshrepair.denoise.presmooth`; the length capped at the mesh's
 resolution, :mod:`meshrepair.denoise.coarse_lowpass`, read from the relief,
-:mod:`meshrepair.denoise.heavylength`, and checked by its Stein risk,
-:mod:`meshrepair.denoise.lengthcheck`; the input's vertex layout kept,
+:mod:`meshrepair.denoise.heavylength`; the input's vertex layout kept,
 :mod:`meshrepair.denoise.layoutkeep`), then the whole schedule runs on the low-passed mesh.
 
 Throughout: λ = ``max(0.02 / γ̂², 0.05)``; the Willmore weight ``w`` from ρ for correlated

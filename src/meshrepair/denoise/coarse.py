@@ -42,7 +42,7 @@ the low-passed input, and the risk below is read on the raw input.
 estimated risk of its normals: with ``T`` one λ|μ pair, ``y`` the input, ``r = P(y − T^k y)``
 the residual along the normals and ``R_∇(k)`` Stein's unbiased estimate of the risk of the
 gradient of the normal offsets, which is to first order the error of the face normals
-(:func:`meshrepair.denoise.lengthcheck.risk_curve` with ``normals=True``, ``L`` the graph
+(:func:`meshrepair.denoise.risk.risk_curve` with ``normals=True``, ``L`` the graph
 Laplacian, the noise level σ̂ read there by one pair),
 
 .. math:: k = \\arg\\min_{0 \\le k \\le K_{max}} R_∇(k),
@@ -51,7 +51,7 @@ Laplacian, the noise level σ̂ read there by one pair),
 
 The risk of the positions, ``Σ_i r_i² + 2σ̂² tr T^k``, weighs an error of long wavelength (which
 costs positions but hardly normals) like one of a few rings and asks for shorter filters on
-smooth surfaces than the normals want (module docstring of ``lengthcheck``).
+smooth surfaces than the normals want (module docstring of ``risk``).
 
 The model's result ``X`` is then filtered by the same ``k`` pairs, ``T^k X``. In the
 coarse-to-fine run (:mod:`meshrepair.denoise.presmooth`) the model ran on ``T^{k_p} y``: the risk
@@ -135,7 +135,7 @@ def least_risk_steps(V: np.ndarray, F: np.ndarray, edges: np.ndarray, *,
     """``k − k_p``, ``k = argmin_{0 ≤ k ≤ K_max + k_p} R_∇(k)`` of the module docstring on the
     raw input ``V`` (``k_p`` = ``before``, the pairs already applied to the model's input),
     at least 0."""
-    from meshrepair.denoise.lengthcheck import risk_curve
+    from meshrepair.denoise.risk import risk_curve
 
     k = int(np.argmin(risk_curve(V, F, edges, MAX_STEPS + int(before), normals=True)))
     return max(0, k - int(before))

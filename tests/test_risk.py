@@ -1,5 +1,6 @@
-"""The risk check (:mod:`meshrepair.denoise.lengthcheck`) of the shorter low-pass length of
-:mod:`meshrepair.denoise.heavylength`."""
+"""Stein's unbiased risk of a Taubin low-pass (:mod:`meshrepair.denoise.risk`): the noise
+level it reads, the risk against the true error and against brute force, its ranking of two
+lengths and its invariance."""
 
 from __future__ import annotations
 
@@ -7,7 +8,7 @@ import numpy as np
 import pytest
 import trimesh
 
-from meshrepair.denoise import lengthcheck as lc
+from meshrepair.denoise import risk as lc
 from meshrepair.denoise.presmooth import presmooth
 from meshrepair.mesh.geometry import vertex_normals
 from meshrepair.mesh.topology import edge_topology
@@ -135,59 +136,35 @@ def test_risk_of_the_normals_estimates_the_gradient_error():
     assert int(np.argmin(pos)) < k_true - 5
 
 
-def test_check_keeps_the_length_the_truth_prefers(monkeypatch):
+def _risk_difference(Y, F, E, k_short, k_long):
+    """``(R(k') − R(k)) / (n ℓ̄²)`` at the level read from ``Y`` (edge units)."""
+    free = np.ones(len(Y), bool)
+    s = lc.normal_level(Y, F, E)
+    ell = float(np.linalg.norm(Y[E[:, 0]] - Y[E[:, 1]], axis=1).mean())
+    r = [lc.normal_risk(Y, presmooth(Y, E, free, k), F, E, k, s) for k in (k_short, k_long)]
+    return (r[0] - r[1]) / (len(Y) * ell * ell)
+
+
+def test_risk_ranks_two_lengths_as_the_truth_does():
     """A smooth sphere under heavy noise wants the long filter; a sphere with relief at the
-    mesh's scale under light noise the short one: the check picks each (the truth agrees)."""
-    monkeypatch.setattr(lc, "LENGTH_CHECK", True)
+    mesh's scale under light noise the short one: the risk, read with the level estimated
+    from the input, ranks the two lengths as the true normal error does."""
     for bumps, g, want_short in ((0.0, 0.35, False), (0.03, 0.05, True)):
         V, F, E, ell = _sphere(bumps=bumps)
         free = np.ones(len(V), bool)
         Y = _noisy(V, F, g * ell, seed=2)
-        Xs, Xl = presmooth(Y, E, free, 2), presmooth(Y, E, free, 40)
         err = [float(np.sum(np.einsum("ij,ij->i", X - V, vertex_normals(X, F)) ** 2))
-               for X in (Xs, Xl)]
+               for X in (presmooth(Y, E, free, 2), presmooth(Y, E, free, 40))]
         assert (err[0] < err[1]) == want_short
-        keep, d = lc.keep_shorter(Y, F, E, Xs, 2, Xl, 40)
-        assert keep == want_short and (d <= 0) == keep
-        k, X, d2 = lc.checked_length(Y, F, E, 2, Xs, 40)
-        assert k == (2 if want_short else 40) and d2 == pytest.approx(d)
-        assert np.array_equal(X, Xs if want_short else Xl)
+        assert (_risk_difference(Y, F, E, 2, 40) <= 0) == want_short
 
 
-def test_check_is_invariant_to_similarity():
-    """The decision and ``d`` (edge units) do not move under scale, rotation and translation."""
+def test_risk_is_invariant_to_similarity():
+    """The risk difference in edge units does not move under scale, rotation and
+    translation."""
     V, F, E, ell = _sphere(bumps=0.02)
     Y = _noisy(V, F, 0.25 * ell, seed=4)
-    free = np.ones(len(V), bool)
     Q, _ = np.linalg.qr(np.random.default_rng(0).normal(size=(3, 3)))
     Yt = 7.5 * Y @ Q.T + np.array([3.0, -2.0, 1.0])
-    ds = []
-    for Z in (Y, Yt):
-        ds.append(lc.keep_shorter(Z, F, E, presmooth(Z, E, free, 4), 4,
-                                  presmooth(Z, E, free, 25), 25))
-    assert ds[0][0] == ds[1][0] and ds[1][1] == pytest.approx(ds[0][1], rel=1e-6, abs=1e-12)
-
-
-def test_check_off_or_equal_lengths_is_the_identity(monkeypatch):
-    """Equal lengths, or the check off, return the short length untouched."""
-    monkeypatch.setattr(lc, "LENGTH_CHECK", True)
-    V, F, E, ell = _sphere(sub=2)
-    X = presmooth(V, E, np.ones(len(V), bool), 3)
-    assert lc.checked_length(V, F, E, 3, X, 3)[0] == 3
-    monkeypatch.setattr(lc, "LENGTH_CHECK", False)
-    k, X2, d = lc.checked_length(V, F, E, 3, X, 9)
-    assert k == 3 and X2 is X and np.isnan(d)
-
-
-def test_check_runs_only_above_the_weight_gate(monkeypatch):
-    """A heavylength weight ``w ≤ W_MIN`` leaves its length untouched (no risk read); above it
-    the smooth sphere under heavy noise takes the long length back."""
-    monkeypatch.setattr(lc, "LENGTH_CHECK", True)
-    V, F, E, ell = _sphere(bumps=0.0)
-    free = np.ones(len(V), bool)
-    Y = _noisy(V, F, 0.35 * ell, seed=2)
-    Xs = presmooth(Y, E, free, 2)
-    k, X, d = lc.checked_length(Y, F, E, 2, Xs, 40, weight=lc.W_MIN)
-    assert k == 2 and X is Xs and np.isnan(d)
-    k, X, d = lc.checked_length(Y, F, E, 2, Xs, 40, weight=lc.W_MIN + 0.05)
-    assert k == 40 and d > 0
+    d0, d1 = (_risk_difference(Z, F, E, 4, 25) for Z in (Y, Yt))
+    assert d1 == pytest.approx(d0, rel=1e-6, abs=1e-12)

@@ -1,12 +1,5 @@
-"""A check of the shorter heavy-noise low-pass length by the risk of the low-pass itself:
-Stein's unbiased risk estimate on the normal part.
-
-:mod:`meshrepair.denoise.heavylength` shortens the coarse-to-fine low-pass ``T^k V``
-(:mod:`meshrepair.denoise.presmooth`) to ``T^{k'} V`` (``k' < k``) where the low-passed input
-reads relief at the mesh's own scale. The read ``c̃`` is one number for the whole mesh, and
-meshes that want the long filter and meshes that want the short one overlap in it (both near
-0.22). The two lengths are checked here by the expected error of the low-passed surface along
-its normals, read from the input alone.
+"""Stein's unbiased risk of a Taubin low-pass of the input, along the normals and of the
+normals: the length of :mod:`meshrepair.denoise.coarse`'s low-pass is its minimiser.
 
 **The risk.** ``T = (I - μL)(I - λL)`` is linear and acts on each coordinate alike, so ``S =
 T^k`` is an ``n × n`` matrix applied to ``x``, ``y``, ``z``. With ``y = x + ε``, ``ε`` zero-mean
@@ -20,11 +13,10 @@ with the normal part of variance ``σ²`` per vertex and no correlation between 
 
 .. math:: R(k) = \\sum_i \\bigl(n_i\\cdot(y - T^k y)_i\\bigr)^2 + 2σ^2\\,\\mathrm{tr}\\,T^k
 
-is the risk up to a constant that does not depend on ``k`` (:func:`normal_risk`), and the
-shorter length is kept only when ``R(k') ≤ R(k)`` (:func:`keep_shorter`). ``tr T^k`` is
-Hutchinson's estimate ``tr S ≈ \\frac13 \\sum_c z_c^\\top S z_c`` over the three coordinates
-of one fixed Rademacher field ``Z`` (the same ``Z`` for both lengths, so their difference is
-read with a smaller variance than either).
+is the risk up to a constant that does not depend on ``k`` (:func:`normal_risk`). ``tr T^k``
+is Hutchinson's estimate ``tr S ≈ \\frac13 \\sum_c z_c^\\top S z_c`` over the three coordinates
+of one fixed Rademacher field ``Z`` (the same ``Z`` for every length, so the differences
+between lengths are read with a smaller variance than each risk).
 
 **The risk of the normals** (:func:`risk_curve` with ``normals=True``, the length of the
 coarse low-pass, :mod:`meshrepair.denoise.coarse`). A face's normal error is, to first order,
@@ -47,27 +39,17 @@ part is small: ``σ̂² = \\lVert P_1 (y - Ty)\\rVert^2 / \\lVert (I - T)Z\\rVer
 the normal residual of one pair over what that pair leaves of a unit white field (``P_1`` the
 normals of ``Ty``). Against the truth's normal part of the noise it reads within 1 % on heavy
 random-direction noise, where the one-ring estimate ``γ̂`` of the denoiser reads 17-20 % low:
-too biased for this check, whose decision can move at ±8 % of ``σ``.
+too biased for a risk whose minimiser moves with ``σ²``.
 
-Everything is in the input's units: the risk scales with ``ℓ̄²`` and the decision is invariant
+Everything is in the input's units: the risk scales with ``ℓ̄²`` and its minimiser is invariant
 to scale, rotation and translation.
-
-**On only where the shortening's weight** ``w > W_MIN = 0.1`` (``LENGTH_CHECK = True``). The
-risk reads the error of the low-passed surface ``T^k V``, but what matters is the *result* of
-the model run on it, and the model removes much of the residual the shorter filter leaves:
-where the shortening's tangential weight is small (``w ≤ 0.02``) the risk can prefer ``k``
-while the final result prefers ``k'``, so the check is left to the inputs with a real
-tangential weight. The gate rests on few rows of the benchmark grid, checked on further seeds
-(docs/parameters.md).
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-LENGTH_CHECK = True
 PROBE_SEED = 0
-W_MIN = 0.1  # the check runs only where the shortening's weight w exceeds it
 
 
 def _probe(n: int) -> np.ndarray:
@@ -169,42 +151,3 @@ def risk_curve(V: np.ndarray, F: np.ndarray, edges: np.ndarray, max_steps: int,
         out[k] = float(rn @ rn) + 2.0 * s2 * float((Z * SZ).sum()) / 3.0
     return out
 
-
-def keep_shorter(V: np.ndarray, F: np.ndarray, edges: np.ndarray, X_short: np.ndarray,
-                 k_short: int, X_long: np.ndarray, k_long: int) -> tuple[bool, float]:
-    """Whether ``T^{k'} V`` has no larger risk than ``T^k V`` (``R(k') ≤ R(k)``).
-
-    Returns
-    -------
-    keep : bool
-    d : float, ``(R(k') − R(k)) / (n ℓ̄²)`` (negative: the shorter length is the better one)
-    """
-    s = normal_level(V, F, edges)
-    ell = float(np.linalg.norm(V[edges[:, 0]] - V[edges[:, 1]], axis=1).mean())
-    d = (normal_risk(V, X_short, F, edges, k_short, s)
-         - normal_risk(V, X_long, F, edges, k_long, s)) / (len(V) * ell * ell)
-    return bool(d <= 0.0), float(d)
-
-
-def checked_length(V: np.ndarray, F: np.ndarray, edges: np.ndarray, k_short: int,
-                   X_short: np.ndarray, k_long: int, weight: float = 1.0, *,
-                   X_long: np.ndarray | None = None) -> tuple[int, np.ndarray, float]:
-    """The shortened length ``k'`` kept, or the full (capped) coarse-to-fine length ``k``
-    back, by :func:`keep_shorter`; ``T^k V`` is computed here unless passed as ``X_long``
-    (``k' = k``, the check off, or the shortening's tangential weight ``w ≤ W_MIN``:
-    unchanged).
-
-    Returns
-    -------
-    k : int, the length used
-    X : (nV, 3) float64, the low-passed input at that length
-    d : float, the risk difference of :func:`keep_shorter` (NaN when not checked)
-    """
-    from meshrepair.denoise.presmooth import presmooth
-
-    if not LENGTH_CHECK or int(k_short) >= int(k_long) or not weight > W_MIN:
-        return int(k_short), X_short, float("nan")
-    if X_long is None:  # T^k V, unless the caller has it already
-        X_long = presmooth(V, edges, np.ones(len(V), bool), int(k_long))
-    keep, d = keep_shorter(V, F, edges, X_short, int(k_short), X_long, int(k_long))
-    return (int(k_short), X_short, d) if keep else (int(k_long), X_long, d)
