@@ -165,6 +165,8 @@ INGREDIENTS = [
                FINISH, switch="REANCHOR"),
     Ingredient("organic", "rules.ORGANIC: the organic one-ring guidance and re-integration",
                FINISH, switch="ORGANIC"),
+    Ingredient("keep folds", "finish.REINTEGRATE_KEEPS_FOLDS: folds after a re-integration "
+               "are unfolded", FINISH, switch="REINTEGRATE_KEEPS_FOLDS"),
     Ingredient("coarse", "coarse.COARSE: longer low-pass where the result is smooth at the "
                "mesh's resolution", FINISH, switch="COARSE"),
     Ingredient("CAD finish", "cadfinish.CAD_FINISH: one-ring guidance on CAD parts", FINISH,

@@ -60,6 +60,7 @@ from collections.abc import Callable
 from meshrepair.denoise.finish import (  # noqa: F401  (re-exported)
     POLISH_DATA,
     REANCHOR,
+    REINTEGRATE_KEEPS_FOLDS,
     finish_result,
 )
 from meshrepair.denoise.folds import (  # noqa: F401  (re-exported)

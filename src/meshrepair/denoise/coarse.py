@@ -204,7 +204,8 @@ def coarse_lowpass(V: np.ndarray, F: np.ndarray, topo, steps: int, *, normal: bo
     a fold the probe holds too is kept): the filter then acts on the unfolded surface, as it
     would after the unfolding, on every vertex: a filter across folded faces spreads the fold,
     and the folds the probe holds too are not features on a surface that is smooth at the
-    mesh's resolution. Without ``unfold`` the faces folded in ``V`` and :data:`FOLD_RINGS` rings
+    mesh's resolution. Without ``unfold`` (the folds ``denoise`` keeps on purpose after the
+    re-integration from the input) the faces folded in ``V`` and :data:`FOLD_RINGS` rings
     around them do not move (:func:`free_vertices`). With ``layout`` (the run's input) the full
     step's surface is resampled at that layout (:func:`meshrepair.denoise.layoutkeep.apply`,
     which reads ``tangential``, r_t); the normal-only step keeps the layout already.

@@ -13,7 +13,7 @@ from dataclasses import replace
 import numpy as np
 
 from meshrepair.denoise import structure as _structure
-from meshrepair.denoise.finish import finish_result
+from meshrepair.denoise.finish import REINTEGRATE_KEEPS_FOLDS, finish_result
 from meshrepair.denoise.folds import (
     COLLAPSE_VOLUME_RATIO,
     UNFOLD_RESULT,
@@ -170,7 +170,8 @@ def _execute(plan: DenoisePlan, V, F, callback=None, *, made_here: bool = False,
                           lam_set=o["lam"] is not None,
                           band_model=st.band is not None and ww > 1.0)
     n_res_folded = 0
-    if o["unfold"] and UNFOLD_RESULT:
+    if o["unfold"] and UNFOLD_RESULT and not (info["reintegrate_steps"]
+                                              and REINTEGRATE_KEEPS_FOLDS and not impulsive):
         V_out, n_res_folded = unfold_result(V_out, topo, r1_V)
         if n_res_folded:
             log.info("unfolded %d faces folded over in the result", n_res_folded)

@@ -80,6 +80,12 @@ def _reanchor_smooth(V_in, V_out, F, topo, sup_v, gamma, info):
     return V_new
 
 
+REINTEGRATE_KEEPS_FOLDS = True
+"""After the re-integration from the input of Gaussian noise along the normals, the faces
+folded in the result follow the input's own vertex layout (a layout the truth shares), so they
+are kept; impulsive noise folds faces around its thrown vertices, and those are unfolded."""
+
+
 REINTEGRATE_POST_STEPS = 5
 """Sun et al. steps of the guidance pass that follows the re-integration: the re-integrated
 vertices carry the input's one-ring jitter along the normals that the ``k`` steps left, and one
@@ -200,7 +206,8 @@ def finish_result(V, V_out, F, topo, M_E, *, data, sup_v, gamma, gamma_rms, impu
             info["coarse_roughness"] = c
             if kc:
                 nrm = _co.normal_only(info["tangential_ratio"], gamma)
-                V_out = _co.coarse_lowpass(V_out, F, topo, kc, normal=nrm, unfold=True,
+                keep = bool(info["reintegrate_steps"]) and not impulsive  # its folds are kept
+                V_out = _co.coarse_lowpass(V_out, F, topo, kc, normal=nrm, unfold=not keep,
                                            reference=probe, layout=V,
                                            tangential=info["tangential_ratio"])
                 info["coarse_steps"] = kc
