@@ -79,14 +79,14 @@ def test_steps_are_the_least_risk_of_the_normals():
     of its normal residual and the probe's trace of L T^k with dense matrices); with k_p pairs
     already applied, the rest of the least-risk length over 0..K_max + k_p. A smooth sphere
     under noise wants a long filter."""
-    from meshrepair.denoise import risk as lc
+    from meshrepair.denoise import risk as rk
     from meshrepair.denoise.presmooth import presmooth
     from meshrepair.mesh.geometry import vertex_normals
 
     V, F, e = _sphere(2)
     Y = add_noise(V, F, 0.2, direction="normal", seed=4)
-    n, s = len(Y), lc.normal_level(Y, F, e)
-    free, Z = np.ones(n, bool), lc._probe(n)
+    n, s = len(Y), rk.normal_level(Y, F, e)
+    free, Z = np.ones(n, bool), rk._probe(n)
     L = np.zeros((n, n))
     np.add.at(L, (e[:, 0], e[:, 1]), -1.0)
     np.add.at(L, (e[:, 1], e[:, 0]), -1.0)

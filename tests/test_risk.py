@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 import trimesh
 
-from meshrepair.denoise import risk as lc
+from meshrepair.denoise import risk as rk
 from meshrepair.denoise.presmooth import presmooth
 from meshrepair.mesh.geometry import vertex_normals
 from meshrepair.mesh.topology import edge_topology
@@ -33,7 +33,7 @@ def test_probe_trace_matches_the_exact_trace():
     """Hutchinson's ``(1/3) Σ_c z_cᵀ T^k z_c`` against ``tr T^k`` from the identity's columns."""
     V, F, E, _ = _sphere(sub=3)
     n, free = len(V), np.ones(len(V), bool)
-    Z = lc._probe(n)
+    Z = rk._probe(n)
     for k in (1, 5, 20):
         exact = float(np.trace(presmooth(np.eye(n), E, free, k)))
         est = float((Z * presmooth(Z, E, free, k)).sum()) / 3.0
@@ -44,7 +44,7 @@ def test_normal_level_reads_white_normal_noise():
     """σ̂ of one λ|μ pair is within 3 % of a known white normal noise (0.1-0.4 ℓ̄)."""
     V, F, E, ell = _sphere()
     for g in (0.1, 0.25, 0.4):
-        s = lc.normal_level(_noisy(V, F, g * ell), F, E)
+        s = rk.normal_level(_noisy(V, F, g * ell), F, E)
         assert s == pytest.approx(g * ell, rel=0.03)
 
 
@@ -61,7 +61,7 @@ def test_risk_estimates_the_normal_error_up_to_its_constant():
         X = presmooth(Y, E, free, k)
         e = np.einsum("ij,ij->i", X - V, vertex_normals(X, F))
         true[k] = float(e @ e)
-        est[k] = lc.normal_risk(Y, X, F, E, k, sigma) - len(V) * sigma ** 2
+        est[k] = rk.normal_risk(Y, X, F, E, k, sigma) - len(V) * sigma ** 2
         assert abs(est[k] - true[k]) < 0.03 * len(V) * sigma ** 2
     assert np.sign(est[30] - est[3]) == np.sign(true[30] - true[3])
 
@@ -72,13 +72,13 @@ def test_risk_curve_is_the_risk_of_each_length():
     Rademacher probe has ``z_i² = 1``), so ``R(0) = 2nσ²``."""
     V, F, E, ell = _sphere(sub=3, bumps=0.02)
     Y = _noisy(V, F, 0.2 * ell, seed=5)
-    s = lc.normal_level(Y, F, E)
+    s = rk.normal_level(Y, F, E)
     free = np.ones(len(V), bool)
-    curve = lc.risk_curve(Y, F, E, 12)
-    brute = [lc.normal_risk(Y, presmooth(Y, E, free, k), F, E, k, s) for k in range(13)]
+    curve = rk.risk_curve(Y, F, E, 12)
+    brute = [rk.normal_risk(Y, presmooth(Y, E, free, k), F, E, k, s) for k in range(13)]
     assert curve == pytest.approx(brute, rel=1e-9)
     assert curve[0] == pytest.approx(2 * len(V) * s * s, rel=1e-12)
-    assert lc.risk_curve(Y, F, E, 3, sigma=2 * s)[0] == pytest.approx(8 * len(V) * s * s)
+    assert rk.risk_curve(Y, F, E, 3, sigma=2 * s)[0] == pytest.approx(8 * len(V) * s * s)
 
 
 def _graph_laplacian(E, n):
@@ -96,10 +96,10 @@ def test_risk_of_the_normals_against_brute_force():
     Rademacher probe: ``(Lz)ᵀz`` sums the degrees), ``tr L = 2 n_E``."""
     V, F, E, ell = _sphere(sub=2, bumps=0.02)
     Y = _noisy(V, F, 0.2 * ell, seed=5)
-    n, s = len(V), lc.normal_level(Y, F, E)
+    n, s = len(V), rk.normal_level(Y, F, E)
     free = np.ones(n, bool)
-    L, Z = _graph_laplacian(E, n), lc._probe(n)
-    curve = lc.risk_curve(Y, F, E, 8, normals=True)
+    L, Z = _graph_laplacian(E, n), rk._probe(n)
+    curve = rk.risk_curve(Y, F, E, 8, normals=True)
     for k in range(9):
         X = presmooth(Y, E, free, k)
         r = np.einsum("ij,ij->i", Y - X, vertex_normals(X, F))
@@ -119,8 +119,8 @@ def test_risk_of_the_normals_estimates_the_gradient_error():
     sigma = 0.1 * ell
     Y = _noisy(V, F, sigma, seed=3)
     free = np.ones(len(V), bool)
-    curve = lc.risk_curve(Y, F, E, 40, sigma=sigma, normals=True)
-    pos = lc.risk_curve(Y, F, E, 40, sigma=sigma)
+    curve = rk.risk_curve(Y, F, E, 40, sigma=sigma, normals=True)
+    pos = rk.risk_curve(Y, F, E, 40, sigma=sigma)
     true = []
     X = Y
     for k in range(41):
@@ -139,9 +139,9 @@ def test_risk_of_the_normals_estimates_the_gradient_error():
 def _risk_difference(Y, F, E, k_short, k_long):
     """``(R(k') − R(k)) / (n ℓ̄²)`` at the level read from ``Y`` (edge units)."""
     free = np.ones(len(Y), bool)
-    s = lc.normal_level(Y, F, E)
+    s = rk.normal_level(Y, F, E)
     ell = float(np.linalg.norm(Y[E[:, 0]] - Y[E[:, 1]], axis=1).mean())
-    r = [lc.normal_risk(Y, presmooth(Y, E, free, k), F, E, k, s) for k in (k_short, k_long)]
+    r = [rk.normal_risk(Y, presmooth(Y, E, free, k), F, E, k, s) for k in (k_short, k_long)]
     return (r[0] - r[1]) / (len(Y) * ell * ell)
 
 
