@@ -315,7 +315,7 @@ def _plan_one(V, F, *, lam, th, a, robust_iters, feature_iters, mask_update_ever
     kp = 0
     inner_plan = None
     if sup_v is not None and willmore_weight is None and lam is None and not presmoothed:
-        kp, inner_plan = _plan_presmooth(V, F, st, options, capped_run=capped, dec=dec)
+        kp, inner_plan = _plan_presmooth(V, F, st, options, dec=dec)
     elif sup_v is not None and not presmoothed:
         dec.append(Decision("presmooth_steps", 0, "off: lam or willmore_weight set by the "
                             "user (the coarse-to-fine low-pass and the correlated low-pass "
@@ -387,7 +387,7 @@ def _once(memo: dict | None, key: str, read):
     return memo[key]
 
 
-def _plan_presmooth(V, F, st: _State, options: dict, *, capped_run: bool, dec: list):
+def _plan_presmooth(V, F, st: _State, options: dict, *, dec: list):
     """The coarse-to-fine decision: Taubin pairs ``k`` on the input for heavy noise on an
     organic mesh (:func:`presmooth_steps`), capped at the mesh's resolution and shortened
     where the low-passed input reads relief at the mesh's scale; with ``k > 0`` the plan of the
