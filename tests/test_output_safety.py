@@ -164,6 +164,15 @@ def test_too_long_output_path_is_a_clear_error(tmp_path, files, capsys):
     assert "too long" in capsys.readouterr().err.lower()
 
 
+@pytest.mark.parametrize("argv", [["denoise", "{in}", ""], ["fill", "{holed}", ""],
+                                  ["inpaint", "{in}", "", "--sphere", "0,0,1,0.3"],
+                                  ["denoise", "{in}", "{out}", "--log", ""]])
+def test_empty_output_name_is_refused_before_any_work(tmp_path, files, capsys, argv):
+    argv = [a.format(**{"in": files["in"], "holed": files["holed"],
+                        "out": tmp_path / "o.ply"}) for a in argv]
+    _refused(capsys, argv, tmp_path, "empty name")
+
+
 # ----------------------------------------------------------------------------------------------
 # the atomic writer
 
@@ -216,6 +225,20 @@ def test_json_log_needs_a_json_name(tmp_path):
         write_json(tmp_path / "log.ply", {})
     p = write_json(tmp_path / "log.json", {"x": np.float32(1.5), "a": np.arange(3)})
     assert p.read_text().replace(" ", "").replace("\n", "") == '{"x":1.5,"a":[0,1,2]}'
+
+
+def test_json_log_is_strict_json(tmp_path):
+    """NaN and infinities, which strict parsers (jq, JavaScript) refuse, are written as null."""
+    import json
+
+    def refuse(c):
+        raise ValueError(c)
+
+    data = {"a": float("nan"), "b": [np.inf, 1.0], "c": {"d": np.float64(-np.inf)},
+            "e": np.array([np.nan])}
+    p = write_json(tmp_path / "log.json", data)
+    assert json.loads(p.read_text(), parse_constant=refuse) == {"a": None, "b": [None, 1.0],
+                                                                "c": {"d": None}, "e": [None]}
 
 
 def test_output_folder_rule(tmp_path):

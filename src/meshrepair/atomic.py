@@ -16,6 +16,7 @@ Example
 from __future__ import annotations
 
 import json
+import math
 import os
 import secrets
 import stat
@@ -163,10 +164,23 @@ def write_json(path: str | os.PathLike, data: Any, *, overwrite: bool = True) ->
     p = Path(path)
     if p.suffix.lower() != ".json":
         raise MeshRepairError(f"cannot write '{p}': a JSON log must have a .json name")
-    text = json.dumps(data, indent=1, default=_jsonable)
+    # NaN and infinities are not JSON (strict parsers, jq and JavaScript refuse them): null
+    plain = _finite(json.loads(json.dumps(data, default=_jsonable)))
+    text = json.dumps(plain, indent=1, allow_nan=False)
     with atomic_write(p, "w", overwrite=overwrite) as fh:
         fh.write(text)
     return p
+
+
+def _finite(x: Any) -> Any:
+    """``x`` (parsed JSON) with every non-finite float replaced by None."""
+    if isinstance(x, float):
+        return x if math.isfinite(x) else None
+    if isinstance(x, dict):
+        return {k: _finite(v) for k, v in x.items()}
+    if isinstance(x, list):
+        return [_finite(v) for v in x]
+    return x
 
 
 def _jsonable(x: Any) -> Any:

@@ -54,12 +54,25 @@ def make_folder(folder: str | os.PathLike, what: str = "--outdir") -> Path:
     return d
 
 
+def _suffix_list(suffixes: tuple[str, ...]) -> tuple[str, ...]:
+    if suffixes is MESH_SUFFIXES:
+        from meshrepair.io import SUPPORTED_FORMATS
+
+        return tuple(SUPPORTED_FORMATS)
+    return suffixes
+
+
 def optional_output(out: str | os.PathLike | None, inputs: list, *, force: bool,
                     suffixes: tuple[str, ...], what: str, others: list | tuple = ()
                     ) -> Path | None:
-    """:func:`output_path` for an optional output option (None stays None)."""
-    if out is None or out == "":
+    """:func:`output_path` for an optional output option (None stays None; an empty name is
+    refused, not taken as "no output": the work would run and have nowhere to go)."""
+    if out is None:
         return None
+    if str(out).strip() == "":
+        raise MeshRepairError(f"{what} is an empty name: give a file name ending with one of "
+                              f"{', '.join(_suffix_list(suffixes))}"
+                              + (", or leave the option out" if what.startswith("-") else ""))
     return output_path(out, inputs, force=force, suffixes=suffixes, what=what, others=others)
 
 
