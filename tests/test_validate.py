@@ -231,6 +231,22 @@ def test_unreferenced_vertices_warned(caplog):
     assert "2 unreferenced vertices" in caplog.text and "[4, 5]" in caplog.text
 
 
+def test_denoise_keeps_unreferenced_vertices_bit_for_bit():
+    """The validation's promise: a vertex no face uses comes back where it was."""
+    import trimesh
+
+    import meshrepair as mr
+
+    s = trimesh.creation.icosphere(2)
+    V = s.vertices + np.random.default_rng(0).normal(size=s.vertices.shape) * 0.01
+    V = np.r_[V, [[100.0, 100.0, 100.0], [-3.0, 0.5, 7.0]]]
+    r = mr.denoise(V, s.faces)
+    assert np.array_equal(r.V[-2:], V[-2:])
+    assert np.abs(r.V[:-2] - V[:-2]).max() > 0  # the mesh itself was denoised
+    p = mr.denoise(V, s.faces, plan=mr.plan_denoise(V, s.faces))
+    assert np.array_equal(p.V[-2:], V[-2:])
+
+
 def test_pinched_boundary_vertex_warned(caplog):
     # bow tie: two triangles touching at vertex 0
     V = np.array([[0.0, 0, 0], [1, 0, 0], [1, 1, 0], [-1, 0, 0], [-1, -1, 0]])

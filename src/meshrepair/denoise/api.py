@@ -54,8 +54,11 @@ units, so the result is equivariant under rotation, translation and uniform scal
 
 from __future__ import annotations
 
+import dataclasses
 import inspect
 from collections.abc import Callable
+
+import numpy as np
 
 from meshrepair.denoise.finish import (  # noqa: F401  (re-exported)
     POLISH_DATA,
@@ -210,9 +213,22 @@ def denoise(
                                   f"(got {', '.join(sorted(given))}); change the plan instead, "
                                   "e.g. dataclasses.replace(plan, lam=0.2)")
         with heap_allocations():
-            return _execute(plan, V, F, callback)
+            return _unreferenced_kept(_execute(plan, V, F, callback), V, F)
     with heap_allocations():
-        return _denoise(V, F, callback=callback, **options)
+        return _unreferenced_kept(_denoise(V, F, callback=callback, **options), V, F)
+
+
+def _unreferenced_kept(r: DenoiseResult, V: np.ndarray, F: np.ndarray) -> DenoiseResult:
+    """``r`` with the vertices no face uses at their input positions, bit for bit (the
+    validation's promise: no energy term reaches them, and the low-passes of the stages would
+    otherwise pull a vertex without neighbours to the origin)."""
+    used = np.zeros(len(V), bool)
+    used[np.asarray(F).ravel()] = True
+    if used.all():
+        return r
+    Vo = np.array(r.V, dtype=np.float64)
+    Vo[~used] = V[~used]
+    return dataclasses.replace(r, V=Vo)
 
 
 def plan_denoise(
