@@ -533,6 +533,14 @@ def test_fill_accepts_trimesh_and_selection_options():
     ({"initial": "flat"}, "initial must be one of"),
     ({"max_iter": -1}, "max_iter"),
     ({"rings": 0}, "rings"),
+    ({"holes": ["a"]}, "integer hole indices"),
+    ({"max_hole_size": float("nan")}, "max_hole_size"),
+    ({"refine": "no"}, "refine must be True or False"),
+    ({"keep_border": "no"}, "keep_border must be True or False"),
+    ({"curvature": None}, "curvature must be True or False"),
+    ({"inner_solver": "x"}, "inner_solver must be one of"),
+    ({"callback": 3}, "callback must be callable"),
+    ({"progress": "x"}, "progress must be callable"),
 ])
 def test_fill_bad_options(kwargs, msg):
     V, F = _holed_grid()

@@ -141,6 +141,9 @@ def fill_holes(
     V, F = as_arrays(V, F)
     check_mesh(V, F, name="input mesh")
     opts = _check_options(opts)
+    from meshrepair.options import check_bool
+
+    check_bool("keep_border", keep_border)
     found = _find_holes(V, F)
     borders, enclosure, notes = classify_loops(V, F, found)
     skip = select_holes(found, max_hole_size=max_hole_size, keep_border=keep_border,

@@ -177,6 +177,14 @@ def _find_holes(V: np.ndarray, F: np.ndarray) -> list[Hole]:
             for k, i in enumerate(order)]
 
 
+def _is_integral(x) -> bool:
+    """A finite whole number that is not a bool (``2``, ``2.0``, ``np.int64(2)``)."""
+    if isinstance(x, (bool, np.bool_)) or not isinstance(x, (int, float, np.integer,
+                                                             np.floating)):
+        return False
+    return bool(np.isfinite(x)) and int(x) == x
+
+
 def _check_indices(name: str, idx: Sequence[int] | None, n: int) -> list[int]:
     if idx is None:
         return []
@@ -184,7 +192,7 @@ def _check_indices(name: str, idx: Sequence[int] | None, n: int) -> list[int]:
         idx = [int(idx)]
     out = []
     for i in idx:
-        if isinstance(i, (bool, np.bool_)) or int(i) != i:
+        if not _is_integral(i):
             raise MeshRepairError(f"{name} must hold integer hole indices, got {i!r}")
         i = int(i)
         if not 0 <= i < n:
@@ -233,8 +241,7 @@ def select_holes(holes: Sequence[Hole], *, max_hole_size: int | None = None,
     """
     n = len(holes)
     if max_hole_size is not None:
-        if isinstance(max_hole_size, bool) or int(max_hole_size) != max_hole_size \
-                or max_hole_size < 3:
+        if not _is_integral(max_hole_size) or max_hole_size < 3:
             raise MeshRepairError(f"max_hole_size must be an integer >= 3 (boundary vertices of "
                                   f"the largest hole to fill), got {max_hole_size!r}")
     excl = set(_check_indices("exclude", exclude, n))
