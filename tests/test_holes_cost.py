@@ -191,7 +191,8 @@ def test_zero_width_hole_is_refused_clearly_not_nan():
                                                       "edge_length"),
     ({"th": 0.0}, "th"), ({"th": float("nan")}, "th"), ({"a": float("nan")}, "a"),
     ({"inner_iters": 0}, "inner_iters"), ({"max_iter": -1}, "max_iter"),
-    ({"rings": 0}, "rings"),
+    ({"rings": 0}, "rings"), ({"max_iter": 10**9}, "max_iter"),
+    ({"inner_iters": 10**9}, "inner_iters"),
 ])
 def test_every_fill_option_is_validated(kw, name):
     V, F = _punch(*grid(11), [(5, 5)], 1.5)

@@ -49,7 +49,8 @@ def test_checkers():
 @pytest.mark.parametrize("kw,name", [
     ({"tol": NAN}, "tol"), ({"tol": 0}, "tol"), ({"tol": -1e-3}, "tol"),
     ({"inner_iters": -1}, "inner_iters"), ({"inner_iters": 0}, "inner_iters"),
-    ({"inner_iters": 2.5}, "inner_iters"),
+    ({"inner_iters": 2.5}, "inner_iters"), ({"inner_iters": 10**9}, "inner_iters"),
+    ({"feature_iters": 10**9}, "feature_iters"), ({"robust_iters": 10**9}, "robust_iters"),
     ({"lam": NAN}, "lam"), ({"lam": -1}, "lam"), ({"lam": INF}, "lam"),
     ({"th": NAN}, "th"), ({"th": 0}, "th"), ({"th": 200}, "th"),
     ({"a": NAN}, "a"), ({"a": 0}, "a"),

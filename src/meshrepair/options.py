@@ -55,6 +55,15 @@ def check_number(name: str, value: Any, *, low: float | None = None, high: float
     return v
 
 
+MAX_ITERATIONS = 100_000
+"""The most ADMM iterations one call accepts (per stage): the defaults run 30-150 and the
+solves stop on their tolerance well before; a larger count is a typing slip that would run for
+days, refused before any work."""
+
+MAX_INNER_ITERATIONS = 1_000
+"""The most V-subproblem iterations per ADMM iteration (the default is 3)."""
+
+
 def check_int(name: str, value: Any, *, low: int | None = None, high: int | None = None,
               allow_none: bool = False) -> int | None:
     """``int(value)`` if it is an integer (an integral float is accepted) within

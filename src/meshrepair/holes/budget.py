@@ -74,10 +74,12 @@ def _finite(name: str, val, *, lo: float | None = None, lo_open: bool = False,
                               f"{' and '.join(rng)}, got {val!r}")
 
 
-def _integer(name: str, val, lo: int) -> None:
+def _integer(name: str, val, lo: int, hi: int | None = None) -> None:
     if isinstance(val, (bool, np.bool_)) or not isinstance(val, (int, np.integer, float)) \
-            or not np.isfinite(val) or int(val) != val or val < lo:
-        raise MeshRepairError(f"{name} must be an integer >= {lo}, got {val!r}")
+            or not np.isfinite(val) or int(val) != val or val < lo \
+            or (hi is not None and val > hi):
+        rule = f">= {lo}" if hi is None else f"in [{lo}, {hi}]"
+        raise MeshRepairError(f"{name} must be an integer {rule}, got {val!r}")
 
 
 def check_fill_options(*, edge_length, lam, th, a, max_iter, tol, rings, relax,
@@ -90,6 +92,8 @@ def check_fill_options(*, edge_length, lam, th, a, max_iter, tol, rings, relax,
     _finite("a", a, lo=0.0, lo_open=True)
     _finite("tol", tol, lo=0.0)
     _finite("relax", relax, lo=0.0)
-    _integer("max_iter", max_iter, 0)
+    from meshrepair.options import MAX_INNER_ITERATIONS, MAX_ITERATIONS
+
+    _integer("max_iter", max_iter, 0, MAX_ITERATIONS)
     _integer("rings", rings, 1)
-    _integer("inner_iters", inner_iters, 1)
+    _integer("inner_iters", inner_iters, 1, MAX_INNER_ITERATIONS)

@@ -99,7 +99,14 @@ class SolverOptions:
     def validate(self) -> None:
         """Check every option (finite, in range, known choice); MeshRepairError naming it."""
         from meshrepair.errors import MeshRepairError
-        from meshrepair.options import check_bool, check_choice, check_int, check_number
+        from meshrepair.options import (
+            MAX_INNER_ITERATIONS,
+            MAX_ITERATIONS,
+            check_bool,
+            check_choice,
+            check_int,
+            check_number,
+        )
 
         check_choice("inner_solver", self.inner_solver, INNER_SOLVERS)
         check_choice("n_solver", self.n_solver, N_SOLVERS)
@@ -110,7 +117,7 @@ class SolverOptions:
         check_number("huber_delta", self.huber_delta, low=0)
         check_number("willmore_weight", self.willmore_weight, low=0)
         check_number("tol", self.tol, low=0, low_open=True)
-        check_int("inner_iters", self.inner_iters, low=1)
+        check_int("inner_iters", self.inner_iters, low=1, high=MAX_INNER_ITERATIONS)
         check_number("n_rtol", self.n_rtol, low=0, high=1, low_open=True, high_open=True)
         check_int("mask_update_every", self.mask_update_every, low=0)
         check_int("min_feature_edges", self.min_feature_edges, low=1)
@@ -128,7 +135,7 @@ class SolverOptions:
             try:
                 check_number("stage a", s.a, low=0, low_open=True)
                 check_number("stage beta2_ratio", s.beta2_ratio, low=0, low_open=True)
-                check_int("stage max_iter", s.max_iter, low=0)
+                check_int("stage max_iter", s.max_iter, low=0, high=MAX_ITERATIONS)
                 check_number("stage switch_tol", s.switch_tol, low=0)
                 check_int("stage min_iter", s.min_iter, low=0)
                 check_number("stage relax", s.relax, low=0, high=1)
