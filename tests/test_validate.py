@@ -247,6 +247,21 @@ def test_denoise_keeps_unreferenced_vertices_bit_for_bit():
     assert np.array_equal(p.V[-2:], V[-2:])
 
 
+@pytest.mark.parametrize("F", [[[0, 1, 2]], [[0, 1, 2], [0, 2, 3]]])
+def test_denoise_of_a_few_faces_raises_no_numpy_warning(F):
+    """One triangle or a square: no vertex lies far enough inside for the noise's profile; the
+    reading is white, with no 'mean of empty slice' from numpy."""
+    import warnings
+
+    import meshrepair as mr
+
+    V = np.array([[0.0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]])[: np.max(F) + 1]
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        r = mr.denoise(V, np.array(F))
+    assert np.isfinite(r.V).all() and r.V.shape == V.shape
+
+
 def test_pinched_boundary_vertex_warned(caplog):
     # bow tie: two triangles touching at vertex 0
     V = np.array([[0.0, 0, 0], [1, 0, 0], [1, 1, 0], [-1, 0, 0], [-1, -1, 0]])

@@ -183,6 +183,8 @@ def noise_scale(V: np.ndarray, F: np.ndarray, *, reference: np.ndarray | None = 
     """
     ks = SCALES
     V, F, topo, W, ok, lbar = _sampled(V, F, topo, max(ks))
+    if not ok.any():  # no vertex far enough inside (a few faces): nothing to read, white
+        return NoiseScale(profile=np.zeros(len(ks)), rho=1.0, steps=0, length=0.0, gamma=0.0)
     C, S = _model_profiles(W, ks, ok)
     s = _residual_levels(V, vertex_normals(V, F), W, ks, ok)
     if reference is not None:
