@@ -259,6 +259,25 @@ def test_cli_batch_fill_and_option_checks(client, tmp_path, capsys):
     assert "needs exactly one of --region, --sphere, --box" in err
     assert "needs --template" in err and "is the input folder" in err
     assert not (tmp_path / "o2").exists()
+    # bad values of the task's own options: refused before a worker starts, nothing written
+    for opts, msg in ((["--task", "denoise", "--lam", "-1"], "lam must be"),
+                      (["--task", "denoise", "--th", "999"], "th must be"),
+                      (["--task", "fill", "--max-hole-size", "2"], "max_hole_size must be")):
+        assert main(["batch", str(src), str(tmp_path / "o3"), *opts, "-q"]) == 2
+        assert msg in capsys.readouterr().err
+        assert not (tmp_path / "o3").exists()
+
+
+def test_check_options_checks_the_values():
+    from meshrepair.batch.jobs import check_options
+
+    assert check_options("denoise", {"lam": 0.2}) == {"lam": 0.2}
+    for task, opts, msg in (("denoise", {"feature_iters": -1}, "feature_iters"),
+                            ("fill", {"refine": "no"}, "refine must be True or False"),
+                            ("inpaint", {"inner_solver": "x"}, "inner_solver"),
+                            ("fill", {"keep_border": 1}, "keep_border")):
+        with pytest.raises(MeshRepairError, match=msg):
+            check_options(task, opts)
 
 
 def test_jobs_equal_single_inpaint_and_complete(tmp_path):

@@ -83,10 +83,36 @@ def check_options(task: str, options: dict) -> dict:
         raise MeshRepairError(f"{task} has no option {', '.join(map(repr, bad))}; its options "
                               f"are {', '.join(allowed)}")
     try:
-        return json.loads(json.dumps(options, sort_keys=True, allow_nan=False))
+        plain = json.loads(json.dumps(options, sort_keys=True, allow_nan=False))
     except (TypeError, ValueError) as exc:
         raise MeshRepairError(f"{task} options must be plain values (numbers, strings, lists) "
                               f"that a record can store: {exc}") from None
+    _check_values(task, plain)
+    return plain
+
+
+def _check_values(task: str, options: dict) -> None:
+    """The values of the solver options, checked as the task's function checks them, before a
+    worker starts (a bad value would otherwise fail every mesh of the collection)."""
+    fn = _public(task)
+    given = {k: v for k, v in options.items() if k not in _EXTRA[task]}
+    args = {n: p.default for n, p in inspect.signature(fn).parameters.items()
+            if p.default is not inspect.Parameter.empty}
+    args.update(given)
+    if task == "denoise":
+        from meshrepair.denoise.checks import _checked
+
+        _checked(**{n: args[n] for n in inspect.signature(_checked).parameters})
+    elif task in ("fill", "inpaint"):
+        from meshrepair.fill.options import _check_options, _solve_options
+        from meshrepair.holes.detect import _is_integral
+        from meshrepair.options import check_bool
+
+        _check_options(_solve_options(args))
+        check_bool("keep_border", args["keep_border"])
+        mh = args.get("max_hole_size")
+        if mh is not None and (not _is_integral(mh) or mh < 3):
+            raise MeshRepairError(f"max_hole_size must be an integer >= 3, got {mh!r}")
 
 
 def _expand(value, inp: Path):
