@@ -262,6 +262,16 @@ def test_denoise_of_a_few_faces_raises_no_numpy_warning(F):
     assert np.isfinite(r.V).all() and r.V.shape == V.shape
 
 
+@pytest.mark.parametrize("k, msg", [(1e60, "coordinates up to"), (1e-60, "span only")])
+def test_coordinates_outside_the_range_are_refused_with_the_factor(k, msg):
+    V, F = tetra()
+    with pytest.raises(MeshRepairError, match=msg) as e:
+        check_mesh(V * k, F)
+    assert "rescale the mesh" in str(e.value)
+    check_mesh(V * 1e45, F)  # inside the range: accepted
+    check_mesh(V * 1e-45, F)
+
+
 def test_pinched_boundary_vertex_warned(caplog):
     # bow tie: two triangles touching at vertex 0
     V = np.array([[0.0, 0, 0], [1, 0, 0], [1, 1, 0], [-1, 0, 0], [-1, -1, 0]])

@@ -21,6 +21,7 @@ F not of shape ``(nF, 3)``             refuse     quads / polygons: triangulate 
 F not integer-valued (e.g. 0.5)        refuse     integral floats (``2.0``) are accepted
                                                   (converted), booleans are refused
 NaN / inf in V                         refuse     count and first vertex indices
+|coordinate| > 1e50, extent < 1e-50    refuse     the factor to rescale by (COORDINATE_RANGE)
 face index negative or >= nV           refuse     valid range, offending range, first faces
 repeated index in a face ([3, 3, 5])   refuse     count, first faces; remove those faces
 edge in more than 2 faces              refuse     count, first edges; split / clean the mesh
@@ -85,6 +86,12 @@ DEGENERATE_SHAPE_TOL = 1e-12
 
 DEGENERATE_SCALE_TOL = 1e-14
 """Doubled face area relative to the mean edge length squared below which a face is degenerate."""
+
+COORDINATE_RANGE = (1e-50, 1e50)
+"""The faces' extent (bounding-box diagonal of the vertices they use) is at least the first
+value and every coordinate at most the second in magnitude: the geometry squares areas (the
+fourth power of a length) and sums them, which overflows above about 1e75 and loses every
+digit below about 1e-75; a mesh outside the range is refused with the factor to rescale by."""
 
 @dataclass(frozen=True)
 class MeshReport:
@@ -251,6 +258,13 @@ def _check_mesh(V, F, *, name: str = "mesh", allow_degenerate: bool = False
             f"vertices: {_first(bad)}); remove or fix them before repairing"
         )
 
+    big = float(np.abs(V).max()) if nV else 0.0
+    if big > COORDINATE_RANGE[1]:
+        raise MeshRepairError(
+            f"{name}: coordinates up to {big:.3g} in magnitude; the solvers work with coordinates "
+            f"up to {COORDINATE_RANGE[1]:g} (areas are fourth powers of lengths): rescale the "
+            f"mesh (e.g. V * {COORDINATE_RANGE[1] / big / 10:.0e}) and scale the result back")
+
     # --- index range ------------------------------------------------------------------------
     fmin, fmax = int(F.min()), int(F.max())
     if fmin < 0 or fmax >= nV:
@@ -270,6 +284,17 @@ def _check_mesh(V, F, *, name: str = "mesh", allow_degenerate: bool = False
             f"e.g. face {int(bad[0])} = {F[bad[0]].tolist()}); remove them, e.g. "
             "F = F[(F[:, 0] != F[:, 1]) & (F[:, 1] != F[:, 2]) & (F[:, 2] != F[:, 0])]"
         )
+
+    if nF:
+        used = np.zeros(nV, bool)
+        used[F.ravel()] = True
+        ext = float(np.linalg.norm(V[used].max(axis=0) - V[used].min(axis=0)))
+        if 0.0 < ext < COORDINATE_RANGE[0]:
+            raise MeshRepairError(
+                f"{name}: the faces span only {ext:.3g} (bounding-box diagonal); the solvers "
+                f"need at least {COORDINATE_RANGE[0]:g} (areas are fourth powers of lengths): "
+                f"rescale the mesh (e.g. V * {10 * COORDINATE_RANGE[0] / ext:.0e}) and scale the "
+                "result back")
 
     # --- edges --------------------------------------------------------------------------------
     # half-edge h = 3 f + k runs F[f, k] -> F[f, (k + 1) % 3]
