@@ -107,6 +107,13 @@ def test_plan_misuse_is_refused(noisy_fandisk, heavy_spot):
     with pytest.raises(MeshRepairError, match="presmooth_steps"):
         mr.denoise(*heavy_spot, plan=dataclasses.replace(ps, presmooth_steps=ps.presmooth_steps
                                                          + 3))
+    for edit, msg in (({"stages": None}, "plan.stages must be a non-empty tuple"),
+                      ({"stages": ()}, "plan.stages must be a non-empty tuple"),
+                      ({"outside_weight": -1.0}, "outside_weight must be")):
+        with pytest.raises(MeshRepairError, match=msg):
+            mr.denoise(V, F, plan=dataclasses.replace(p, **edit))
+    with pytest.raises(MeshRepairError, match="at least one stage"):
+        mr.plan_denoise(V, F, stages=())  # as denoise(stages=()) refuses it
 
 
 def test_presmooth_can_be_switched_off_in_the_plan(heavy_spot):

@@ -44,5 +44,5 @@ def _checked(lam, th, a, robust_iters, feature_iters, mask_update_every, min_fea
                   inner_iters=3 if o["inner_iters"] is None else o["inner_iters"],
                   n_solver=n_solver, mask_update_every=o["mask_update_every"],
                   min_feature_edges=o["min_feature_edges"],
-                  **({"stages": o["stages"]} if o["stages"] else {})).validate()
+                  **({"stages": o["stages"]} if o["stages"] is not None else {})).validate()
     return o

@@ -42,6 +42,7 @@ def _execute(plan: DenoisePlan, V, F, callback=None, *, made_here: bool = False,
     if st is None:
         raise MeshRepairError("this plan carries no reading of a mesh (DenoiseResult.plan is a "
                               "record of what ran): make a plan with mr.plan_denoise(V, F)")
+    _check_edits(plan)
     if (plan.n_vertices != len(V) or plan.n_faces != len(F)
             or (not made_here and st.mesh_key != mesh_key(V, F))):
         raise MeshRepairError("this plan was made for another mesh: make it with "
@@ -199,6 +200,19 @@ def _execute(plan: DenoisePlan, V, F, callback=None, *, made_here: bool = False,
         # the record keeps no arrays of the reading: it would hold the probe's result alive
         plan=replace(plan, after_solve=_after(info, st.info, ()), _state=None),
     )
+
+
+def _check_edits(plan: DenoisePlan) -> None:
+    """The fields a user may edit with ``dataclasses.replace``, checked as the options of
+    :func:`meshrepair.denoise` are (MeshRepairError naming the field)."""
+    from meshrepair.model.solver import Stage
+    from meshrepair.options import check_number
+
+    if not (isinstance(plan.stages, tuple) and plan.stages
+            and all(isinstance(s, Stage) for s in plan.stages)):
+        raise MeshRepairError(f"plan.stages must be a non-empty tuple of Stage objects (edit the "
+                              f"plan's own, e.g. plan.stages[:1]), got {plan.stages!r}")
+    check_number("outside_weight", plan.outside_weight, low=0)
 
 
 def _refuse_unused_edits(plan: DenoisePlan, planned: int) -> None:
