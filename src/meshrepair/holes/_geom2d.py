@@ -163,36 +163,18 @@ def triangulate_capped(data: dict, opts: str, cap: int) -> dict:
 def _triangulate(Q: np.ndarray, segments: np.ndarray, max_area: float | None,
                  holes: np.ndarray | None = None, quality: bool = True) -> tuple[np.ndarray,
                                                                                   np.ndarray]:
-    # Triangle's refinement follows the exact rounding of its input: the polygon is put in
-    # units of its RMS radius and rounded to a grid of 2^-GRID_BITS of that unit, so a scaled
-    # or moved copy of the same polygon gives the same triangulation (scaled back)
-    Q = np.asarray(Q, dtype=np.float64)
-    o = Q.mean(axis=0)
-    s = float(np.sqrt(((Q - o) ** 2).sum(axis=1).mean())) or 1.0
-
-    def unit(Y):
-        return np.round((np.asarray(Y, dtype=np.float64) - o) / s * 2.0 ** GRID_BITS) \
-            / 2.0 ** GRID_BITS
-
-    data = {"vertices": unit(Q), "segments": segments}
+    data = {"vertices": Q, "segments": segments}
     if holes is not None:
-        data["holes"] = unit(holes)
+        data["holes"] = holes
     opts = "pYQ"
     if quality:
         opts += f"q{MIN_ANGLE:g}"
-    a_unit = None if max_area is None else max_area / (s * s)
-    if a_unit is not None:
-        opts += _area_switch(a_unit)
-    out = triangulate_capped(data, opts, steiner_cap(data["vertices"], len(Q), a_unit))
-    X = np.asarray(out["vertices"], dtype=np.float64) * s + o
-    X[: len(Q)] = Q  # the polygon's own vertices come first, exactly as given
+    if max_area is not None:
+        opts += _area_switch(max_area)
+    out = triangulate_capped(data, opts, steiner_cap(Q, len(Q), max_area))
+    X = np.asarray(out["vertices"], dtype=np.float64)
     T = np.asarray(out.get("triangles", np.empty((0, 3))), dtype=np.int64).reshape(-1, 3)
     return X, T
-
-
-GRID_BITS = 30
-"""Bits of the grid the 2-D polygon is rounded to before triangulating (in units of its RMS
-radius): far below any feature of a patch, far above the rounding of a scaled copy."""
 
 
 def _plane_frame(n: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
