@@ -64,6 +64,20 @@ MAX_INNER_ITERATIONS = 1_000
 """The most V-subproblem iterations per ADMM iteration (the default is 3)."""
 
 
+def is_whole(value: Any) -> bool:
+    """A finite whole number that is not a bool: ``2``, ``2.0``, ``np.int64(2)``."""
+    if isinstance(value, bool) or not isinstance(value, numbers.Real):
+        return False
+    v = float(value)
+    return math.isfinite(v) and v == int(v)
+
+
+def check_callable(name: str, value: Any) -> None:
+    """MeshRepairError unless ``value`` is None or callable."""
+    if value is not None and not callable(value):
+        raise MeshRepairError(f"{name} must be callable or None, got {type(value).__name__}")
+
+
 def check_int(name: str, value: Any, *, low: int | None = None, high: int | None = None,
               allow_none: bool = False) -> int | None:
     """``int(value)`` if it is an integer (an integral float is accepted) within
@@ -72,12 +86,9 @@ def check_int(name: str, value: Any, *, low: int | None = None, high: int | None
         return None
     rule = "an integer" + (f" {_bounds(low, high, False, False)}"
                            if low is not None or high is not None else "")
-    if isinstance(value, bool) or not isinstance(value, numbers.Real):
+    if not is_whole(value):
         raise MeshRepairError(f"{name} must be {rule}, got {value!r}")
-    v = float(value)
-    if not math.isfinite(v) or v != int(v):
-        raise MeshRepairError(f"{name} must be {rule}, got {value!r}")
-    iv = int(v)
+    iv = int(float(value))
     if (low is not None and iv < low) or (high is not None and iv > high):
         raise MeshRepairError(f"{name} must be {rule}, got {value!r}")
     return iv

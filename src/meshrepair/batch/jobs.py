@@ -105,14 +105,12 @@ def _check_values(task: str, options: dict) -> None:
         _checked(**{n: args[n] for n in inspect.signature(_checked).parameters})
     elif task in ("fill", "inpaint"):
         from meshrepair.fill.options import _check_options, _solve_options
-        from meshrepair.holes.detect import _is_integral
+        from meshrepair.holes.detect import check_max_hole_size
         from meshrepair.options import check_bool
 
         _check_options(_solve_options(args))
         check_bool("keep_border", args["keep_border"])
-        mh = args.get("max_hole_size")
-        if mh is not None and (not _is_integral(mh) or mh < 3):
-            raise MeshRepairError(f"max_hole_size must be an integer >= 3, got {mh!r}")
+        check_max_hole_size(args.get("max_hole_size"))
 
 
 def _expand(value, inp: Path):

@@ -242,8 +242,9 @@ def complete(
     if icp not in ICP_MODES:
         raise MeshRepairError(f"icp must be one of {ICP_MODES} (or a bool), got {icp!r}")
     icp_rings = check_int("icp_rings", icp_rings, low=0)
-    if callback is not None and not callable(callback):
-        raise MeshRepairError(f"callback must be callable or None, got {type(callback).__name__}")
+    from meshrepair.options import check_callable
+
+    check_callable("callback", callback)
     if strip_fidelity is None:
         strip_fidelity = 16.0 if mode == "adaptive" else 0.0
     if not (np.isfinite(strip_fidelity) and strip_fidelity >= 0):

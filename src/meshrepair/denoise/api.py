@@ -201,8 +201,9 @@ def denoise(
 
     options = {k: v for k, v in locals().items() if k in _OPTION_DEFAULTS}
     V, F = as_arrays(V, F)
-    if callback is not None and not callable(callback):
-        raise MeshRepairError(f"callback must be callable or None, got {type(callback).__name__}")
+    from meshrepair.options import check_callable
+
+    check_callable("callback", callback)
     if plan is not None:
         if not isinstance(plan, DenoisePlan):
             raise MeshRepairError(f"plan must be a DenoisePlan from mr.plan_denoise, got "

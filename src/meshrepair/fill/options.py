@@ -28,16 +28,13 @@ def _check_options(opts: dict) -> dict:
     """Check the solve options (:class:`MeshRepairError` naming the bad one); returns them with
     ``max_iter`` and ``rings`` as ``int``."""
     from meshrepair.model.inner import INNER_SOLVERS
-    from meshrepair.options import check_bool
+    from meshrepair.options import check_bool, check_callable, check_choice
 
     for k in ("denoise", "refine", "check", "creases", "curvature", "triharmonic", "fitted"):
         check_bool(k, opts[k])
-    if opts["inner_solver"] not in INNER_SOLVERS:
-        raise MeshRepairError(f"inner_solver must be one of {INNER_SOLVERS}, got "
-                              f"{opts['inner_solver']!r}")
+    check_choice("inner_solver", opts["inner_solver"], INNER_SOLVERS)
     for k in ("callback", "progress"):
-        if opts[k] is not None and not callable(opts[k]):
-            raise MeshRepairError(f"{k} must be callable or None, got {type(opts[k]).__name__}")
+        check_callable(k, opts[k])
     initial = opts["initial"]
     if initial not in INITIAL_MODES:
         raise MeshRepairError(f"initial must be one of {INITIAL_MODES}, got {initial!r}")

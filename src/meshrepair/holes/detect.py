@@ -9,6 +9,7 @@ import numpy as np
 
 from meshrepair.errors import MeshRepairError
 from meshrepair.mesh.topology import boundary_loops, connected_components
+from meshrepair.options import is_whole
 
 
 @dataclass(frozen=True)
@@ -177,12 +178,11 @@ def _find_holes(V: np.ndarray, F: np.ndarray) -> list[Hole]:
             for k, i in enumerate(order)]
 
 
-def _is_integral(x) -> bool:
-    """A finite whole number that is not a bool (``2``, ``2.0``, ``np.int64(2)``)."""
-    if isinstance(x, (bool, np.bool_)) or not isinstance(x, (int, float, np.integer,
-                                                             np.floating)):
-        return False
-    return bool(np.isfinite(x)) and int(x) == x
+def check_max_hole_size(max_hole_size) -> None:
+    """MeshRepairError unless ``max_hole_size`` is None or an integer >= 3."""
+    if max_hole_size is not None and (not is_whole(max_hole_size) or max_hole_size < 3):
+        raise MeshRepairError(f"max_hole_size must be an integer >= 3 (boundary vertices of "
+                              f"the largest hole to fill), got {max_hole_size!r}")
 
 
 def _check_indices(name: str, idx: Sequence[int] | None, n: int) -> list[int]:
@@ -192,7 +192,7 @@ def _check_indices(name: str, idx: Sequence[int] | None, n: int) -> list[int]:
         idx = [int(idx)]
     out = []
     for i in idx:
-        if not _is_integral(i):
+        if not is_whole(i):
             raise MeshRepairError(f"{name} must hold integer hole indices, got {i!r}")
         i = int(i)
         if not 0 <= i < n:
@@ -240,10 +240,7 @@ def select_holes(holes: Sequence[Hole], *, max_hole_size: int | None = None,
         For an index that does not exist or an invalid ``max_hole_size``.
     """
     n = len(holes)
-    if max_hole_size is not None:
-        if not _is_integral(max_hole_size) or max_hole_size < 3:
-            raise MeshRepairError(f"max_hole_size must be an integer >= 3 (boundary vertices of "
-                                  f"the largest hole to fill), got {max_hole_size!r}")
+    check_max_hole_size(max_hole_size)
     excl = set(_check_indices("exclude", exclude, n))
     only = None if indices is None else set(_check_indices("holes", indices, n))
     skipped: dict[int, str] = {}

@@ -285,9 +285,8 @@ def _check_mesh(V, F, *, name: str = "mesh", allow_degenerate: bool = False
             "F = F[(F[:, 0] != F[:, 1]) & (F[:, 1] != F[:, 2]) & (F[:, 2] != F[:, 0])]"
         )
 
+    used = np.bincount(F.ravel(), minlength=nV) > 0  # also counts the unreferenced, below
     if nF:
-        used = np.zeros(nV, bool)
-        used[F.ravel()] = True
         ext = float(np.linalg.norm(V[used].max(axis=0) - V[used].min(axis=0)))
         if 0.0 < ext < COORDINATE_RANGE[0]:
             raise MeshRepairError(
@@ -361,7 +360,6 @@ def _check_mesh(V, F, *, name: str = "mesh", allow_degenerate: bool = False
             "(legitimate along seams) but are not connected to each other", name, n_dup,
             _first(dups))
 
-    used = np.bincount(F.ravel(), minlength=nV) > 0
     n_unref = int(nV - used.sum())
     if n_unref:
         logger.warning(
