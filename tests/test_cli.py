@@ -21,6 +21,19 @@ def test_help_lists_commands(capsys):
         assert cmd in out
 
 
+def test_python_dash_m_runs_the_tool():
+    """``python -m meshrepair`` is the ``meshrepair`` command (its help and exit status)."""
+    import subprocess
+    import sys
+
+    ok = subprocess.run([sys.executable, "-m", "meshrepair", "--help"], capture_output=True,
+                        text=True, timeout=120)
+    assert ok.returncode == 0 and "denoise" in ok.stdout
+    bad = subprocess.run([sys.executable, "-m", "meshrepair", "denoise", "missing.ply", "o.ply"],
+                         capture_output=True, text=True, timeout=120)
+    assert bad.returncode != 0 and "missing.ply" in bad.stderr
+
+
 def test_noise_denoise_metrics_roundtrip(tmp_path, capsys):
     src = SPOT
     noisy = tmp_path / "noisy.ply"
