@@ -43,8 +43,8 @@ def _soup_mesh():
 # ------------------------------------------------------------------------------------------------
 
 
-@pytest.mark.parametrize("name,binary", [("m.ply", True), ("m.ply", False), ("m.obj", True),
-                                         ("m.off", True), ("M.PLY", True)])
+@pytest.mark.parametrize("name,binary", [("m.ply", True), ("m.ply", False), ("m.obj", None),
+                                         ("m.off", False), ("M.PLY", True)])
 def test_round_trip_exact(tmp_path, name, binary):
     V, F = _mesh()
     p = write_mesh(tmp_path / name, V, F, binary=binary)
@@ -56,6 +56,18 @@ def test_round_trip_exact(tmp_path, name, binary):
     np.testing.assert_array_equal(m.F, F)
     assert m.path == p
     assert m.vertex_attributes == {}
+
+
+@pytest.mark.parametrize("name", ["m.obj", "m.OFF"])
+def test_binary_text_format_refused(tmp_path, name):
+    """OBJ and OFF are written as text: ``binary=True`` is refused before a file is made, not
+    ignored; a non-boolean ``binary`` is refused for every format."""
+    V, F = _mesh()
+    with pytest.raises(MeshRepairError, match="text only"):
+        write_mesh(tmp_path / name, V, F, binary=True)
+    with pytest.raises(MeshRepairError, match="binary must be"):
+        write_mesh(tmp_path / "m.ply", V, F, binary="yes")
+    assert list(tmp_path.iterdir()) == []
 
 
 @pytest.mark.parametrize("binary", [True, False])

@@ -162,7 +162,8 @@ def write_mesh(
     vertex_attributes : mapping of str to (nV,) array_like, optional
         Extra per-vertex scalar properties, added to (or replacing) those of ``like``.
     binary : bool, optional
-        Binary PLY/STL or ASCII; default: as ``like`` was stored, else binary.
+        Binary PLY/STL or ASCII; default: as ``like`` was stored, else binary. OBJ and OFF are
+        text only: ``binary=True`` is refused for them.
     overwrite : bool, optional
         If False and ``path`` exists, raise instead of replacing it.
     like : MeshData, optional
@@ -221,6 +222,12 @@ def write_mesh(
         raise MeshRepairError(f"precision must be 'float32' or 'float64', got {precision!r}")
     if like is not None:
         _check_like(like, nV, len(Fi), p)
+    if binary is not None and not isinstance(binary, (bool, np.bool_)):
+        raise MeshRepairError(f"binary must be True, False or None, got {binary!r}")
+    if binary and ext in (".obj", ".off"):
+        raise MeshRepairError(f"cannot write '{p}' with binary=True: {ext[1:].upper()} is written "
+                              "as text only (use a .ply or .stl path for a binary file, or "
+                              "binary=None)")
     fmt = like.file_format if like is not None and like.file_format is not None else None
     if binary is None:
         binary = fmt.binary if fmt is not None else True
