@@ -52,7 +52,7 @@ def test_checkers():
     ({"inner_iters": 2.5}, "inner_iters"), ({"inner_iters": 10**9}, "inner_iters"),
     ({"feature_iters": 10**9}, "feature_iters"), ({"robust_iters": 10**9}, "robust_iters"),
     ({"lam": NAN}, "lam"), ({"lam": -1}, "lam"), ({"lam": INF}, "lam"),
-    ({"th": NAN}, "th"), ({"th": 0}, "th"), ({"th": 200}, "th"),
+    ({"th": NAN}, "th"), ({"th": 0}, "th"), ({"th": 200}, "th"), ({"th": True}, "th"),
     ({"a": NAN}, "a"), ({"a": 0}, "a"),
     ({"robust_iters": NAN}, "robust_iters"), ({"robust_iters": -2}, "robust_iters"),
     ({"feature_iters": 1.5}, "feature_iters"), ({"feature_iters": INF}, "feature_iters"),

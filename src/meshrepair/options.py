@@ -55,6 +55,13 @@ def check_number(name: str, value: Any, *, low: float | None = None, high: float
     return v
 
 
+def check_angle(name: str, value: Any) -> float:
+    """A dihedral threshold in degrees: a finite number (not a bool) in the open range
+    (0, 180)."""
+    return check_number(f"{name} (an angle in degrees)", value, low=0, high=180, low_open=True,
+                        high_open=True)
+
+
 MAX_ITERATIONS = 100_000
 """The most ADMM iterations one call accepts (per stage): the defaults run 30-150 and the
 solves stop on their tolerance well before; a larger count is a typing slip that would run for

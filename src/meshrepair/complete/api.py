@@ -216,14 +216,13 @@ def complete(
         raise MeshRepairError(f"mode must be one of {MODES}, got {mode!r}")
     if orientation not in ORIENTATIONS:
         raise MeshRepairError(f"orientation must be one of {ORIENTATIONS}, got {orientation!r}")
-    from meshrepair.options import MAX_ITERATIONS, check_bool, check_int, check_number
+    from meshrepair.options import MAX_ITERATIONS, check_angle, check_bool, check_int, check_number
 
     strip_rings = check_int("strip_rings", strip_rings, low=1)
     iterations = check_int("iterations", iterations, low=0, high=MAX_ITERATIONS)
     max_size_ratio = check_number("max_size_ratio", max_size_ratio, low=1)
     lam = check_number("lam", lam, low=0, allow_none=True)
-    if not (isinstance(th, (int, float, np.number)) and 0 < th < 180):
-        raise MeshRepairError(f"th must be an angle in (0, 180) degrees, got {th}")
+    th = check_angle("th", th)
     a = check_number("a", a, low=0, low_open=True)
     tol = check_number("tol", tol, low=0, low_open=True)
     mask_update_every = check_int("mask_update_every", mask_update_every, low=0)

@@ -12,6 +12,7 @@ def _checked(lam, th, a, robust_iters, feature_iters, mask_update_every, min_fea
     from meshrepair.options import (
         MAX_INNER_ITERATIONS,
         MAX_ITERATIONS,
+        check_angle,
         check_bool,
         check_int,
         check_number,
@@ -19,7 +20,7 @@ def _checked(lam, th, a, robust_iters, feature_iters, mask_update_every, min_fea
 
     o = dict(
         lam=check_number("lam", lam, low=0, allow_none=True),
-        th=th,
+        th=check_angle("th", th),
         a=check_number("a", a, low=0, low_open=True),
         robust_iters=check_int("robust_iters", robust_iters, low=0, high=MAX_ITERATIONS,
                                allow_none=True),

@@ -102,6 +102,7 @@ class SolverOptions:
         from meshrepair.options import (
             MAX_INNER_ITERATIONS,
             MAX_ITERATIONS,
+            check_angle,
             check_bool,
             check_choice,
             check_int,
@@ -112,8 +113,7 @@ class SolverOptions:
         check_choice("n_solver", self.n_solver, N_SOLVERS)
         check_choice("mask_source", self.mask_source, ("N", "V"))
         check_number("lam", self.lam, low=0)
-        if not (isinstance(self.th, (int, float, np.number)) and 0 < self.th < 180):
-            raise MeshRepairError(f"th must be an angle in (0, 180) degrees, got {self.th}")
+        check_angle("th", self.th)
         check_number("huber_delta", self.huber_delta, low=0)
         check_number("willmore_weight", self.willmore_weight, low=0)
         check_number("tol", self.tol, low=0, low_open=True)
