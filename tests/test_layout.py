@@ -34,6 +34,7 @@ LAYERS: list[tuple[str, ...]] = [
     ("batch",),
     ("commands",),
     ("cli", "__init__"),
+    ("__main__",),  # python -m meshrepair: the cli
 ]
 RANK = {wing: i for i, layer in enumerate(LAYERS) for wing in layer}
 
