@@ -58,8 +58,11 @@ def check_number(name: str, value: Any, *, low: float | None = None, high: float
 def check_angle(name: str, value: Any) -> float:
     """A dihedral threshold in degrees: a finite number (not a bool) in the open range
     (0, 180)."""
-    return check_number(f"{name} (an angle in degrees)", value, low=0, high=180, low_open=True,
-                        high_open=True)
+    if not isinstance(value, bool) and isinstance(value, numbers.Real):
+        v = float(value)
+        if math.isfinite(v) and 0 < v < 180:
+            return v
+    raise MeshRepairError(f"{name} must be an angle in degrees in (0, 180), got {value!r}")
 
 
 MAX_ITERATIONS = 100_000
