@@ -86,7 +86,7 @@ def test_steps_are_the_least_risk_of_the_normals():
     V, F, e = _sphere(2)
     Y = add_noise(V, F, 0.2, direction="normal", seed=4)
     n, s = len(Y), rk.normal_level(Y, F, e)
-    free, Z = np.ones(n, bool), rk._probe(n)
+    free, Z = np.ones(n, bool), rk._probe(Y, e)
     L = np.zeros((n, n))
     np.add.at(L, (e[:, 0], e[:, 1]), -1.0)
     np.add.at(L, (e[:, 1], e[:, 0]), -1.0)

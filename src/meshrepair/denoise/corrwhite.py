@@ -57,7 +57,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from meshrepair.denoise.scale import _mad_std, _sampled
+from meshrepair.denoise.scale import _mad_std, _sampled, model_probe
 from meshrepair.mesh.geometry import vertex_normals
 from meshrepair.mesh.topology import Topology
 
@@ -87,18 +87,17 @@ class BandRead:
     gamma: float
 
 
-def band_models(W, ok: np.ndarray, *, n_samples: int = N_SAMPLES, seed: int = 0):
+def band_models(W, ok: np.ndarray, Z: np.ndarray):
     """``c_a(m)`` (rows: :data:`CANDIDATE_STEPS`, columns a = 0, 1) and ``σ(W^m Z)`` on the
-    samples ``ok``, from one chain ``Z, WZ, W²Z, ...`` of random probes.
+    samples ``ok``, from one chain ``Z, WZ, W²Z, ...`` of the random probes ``Z``
+    (:func:`meshrepair.denoise.scale.model_probe`, (nV, p)).
 
     Returns
     -------
     C : (len(CANDIDATE_STEPS), 2) float64
     S : (len(CANDIDATE_STEPS),) float64
     """
-    rng = np.random.default_rng(seed)
-    n_probe = int(np.clip(np.ceil(n_samples / max(int(ok.sum()), 1)), 1, 8))
-    P = [rng.normal(size=(W.shape[0], n_probe))]
+    P = [Z]
     for _ in range(max(CANDIDATE_STEPS) + 2):
         P.append(W @ P[-1])
     C = np.zeros((len(CANDIDATE_STEPS), 2))
@@ -141,8 +140,8 @@ def band_read(V: np.ndarray, F: np.ndarray, *, reference: np.ndarray | None = No
     -------
     BandRead
     """
-    V, F, topo, W, ok, lbar = _sampled(V, F, topo, 2)  # medians over an even subsample
-    C, S = band_models(W, ok)
+    V, F, topo, W, ok, lbar, order = _sampled(V, F, topo, 2)  # medians over an even subsample
+    C, S = band_models(W, ok, model_probe(V, ok, order, N_SAMPLES))
     nV = vertex_normals(V, F)
     b0, b1, B0 = _bands(V, nV, W, ok)
     lev = np.array([_mad_std(b0, overwrite=True), _mad_std(b1, overwrite=True)])

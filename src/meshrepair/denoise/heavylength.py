@@ -90,6 +90,7 @@ def relief_read(X: np.ndarray, F: np.ndarray, edges: np.ndarray, gamma: float,
     """
     from meshrepair.denoise.lowpass import taubin_region, umbrella
     from meshrepair.mesh.geometry import vertex_normals
+    from meshrepair.mesh.probe import probe_field, used_vertices
 
     W = umbrella(edges, len(X))
     n = vertex_normals(X, F)
@@ -97,7 +98,8 @@ def relief_read(X: np.ndarray, F: np.ndarray, edges: np.ndarray, gamma: float,
     r = h - W @ (W @ h)
     hh, rr = float(h @ h), float(r @ r)
     if gamma > 0 and ell > 0:
-        e = np.random.default_rng(NOISE_SEED).standard_normal(len(X)) * (float(gamma) * ell)
+        e = probe_field(X, seed=NOISE_SEED, used=used_vertices(edges, len(X)))
+        e = e * (float(gamma) * ell)
         e = taubin_region(np.c_[e, e, e], edges, np.ones(len(X), bool), int(steps))[:, 0]
         hn = e - W @ (W @ e)
         rn = hn - W @ (W @ hn)

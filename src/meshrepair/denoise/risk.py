@@ -52,9 +52,14 @@ import numpy as np
 PROBE_SEED = 0
 
 
-def _probe(n: int) -> np.ndarray:
-    """The fixed Rademacher field ``Z`` (n, 3)."""
-    return np.random.default_rng(PROBE_SEED).choice([-1.0, 1.0], size=(n, 3))
+def _probe(V: np.ndarray, edges: np.ndarray) -> np.ndarray:
+    """The fixed Rademacher field ``Z`` (nV, 3), drawn in the canonical order of the vertices
+    on ``edges`` (:mod:`meshrepair.mesh.probe`: a relabelled mesh gets the same ``Z`` on each
+    vertex)."""
+    from meshrepair.mesh.probe import probe_field, used_vertices
+
+    return probe_field(V, 3, seed=PROBE_SEED, kind="rademacher",
+                       used=used_vertices(edges, len(V)))
 
 
 def normal_level(V: np.ndarray, F: np.ndarray, edges: np.ndarray) -> float:
@@ -76,7 +81,7 @@ def normal_level(V: np.ndarray, F: np.ndarray, edges: np.ndarray) -> float:
     free = np.ones(len(V), bool)
     X = presmooth(V, edges, free, 1)
     rn = np.einsum("ij,ij->i", V - X, vertex_normals(X, F))
-    Z = _probe(len(V))
+    Z = _probe(V, edges)
     fz = float(((Z - presmooth(Z, edges, free, 1)) ** 2).sum()) / 3.0
     return float(np.sqrt(float(rn @ rn) / fz)) if fz > 0 else 0.0
 
@@ -102,7 +107,7 @@ def normal_risk(V: np.ndarray, X: np.ndarray, F: np.ndarray, edges: np.ndarray, 
     from meshrepair.mesh.geometry import vertex_normals
 
     rn = np.einsum("ij,ij->i", V - X, vertex_normals(X, F))
-    Z = _probe(len(V))
+    Z = _probe(V, edges)
     tr = float((Z * presmooth(Z, edges, np.ones(len(V), bool), int(steps))).sum()) / 3.0
     return float(rn @ rn) + 2.0 * float(sigma) ** 2 * tr
 
@@ -133,7 +138,7 @@ def risk_curve(V: np.ndarray, F: np.ndarray, edges: np.ndarray, max_steps: int,
     s2 = float(normal_level(V, F, edges) if sigma is None else sigma) ** 2
     free = np.ones(len(V), bool)
     W = umbrella(edges, len(V))  # built once for the 2 · max_steps single pairs below
-    X, Z = V, _probe(len(V))
+    X, Z = V, _probe(V, edges)
     SZ = Z
     i, j = np.asarray(edges[:, 0]), np.asarray(edges[:, 1])
     if normals:  # L Z, L the graph Laplacian (G^T G, G the edge differences)

@@ -10,7 +10,8 @@ rings)
            \\qquad s_k = \\frac{1.4826\\,\\mathrm{MAD}(h^{(k)})}{c_k(0)\\,\\bar l},
 
 normalised by ``c_k(m)``, the RMS of ``(I - W^k) W^m Z`` for a unit-variance white field ``Z``
-(measured on the mesh itself with random probes), so that i.i.d. noise of level γ reads
+(measured on the mesh itself with random probes drawn in a canonical vertex order,
+:mod:`meshrepair.mesh.probe`), so that i.i.d. noise of level γ reads
 ``s_k = γ`` at every ``k``. Noise made by ``m`` diffusion steps of white noise reads
 ``s_k ∝ c_k(m)/c_k(0)``, which grows with ``k``: the *profile* ``s_k / s_1`` identifies ``m``. A
 clean curved surface also gives a residual growing with ``k`` (shrinkage), so the profile of a
@@ -34,6 +35,7 @@ import scipy.sparse as sp
 from meshrepair._kernels import edge_lengths_exact
 from meshrepair._kernels.select import median_inplace
 from meshrepair.mesh.geometry import vertex_normals
+from meshrepair.mesh.probe import canonical_order, probe_field, used_vertices
 from meshrepair.mesh.topology import Topology, edge_topology, umbrella_operator
 
 SCALES = (1, 2, 4)
@@ -66,15 +68,19 @@ def _umbrella_operator(topo: Topology) -> sp.csr_matrix:
     return umbrella_operator(topo)
 
 
-def _interior_vertices(topo: Topology, rings: int, W: sp.csr_matrix) -> np.ndarray:
-    """Vertices more than ``rings`` rings away from the boundary (one-sided averages)."""
+def _interior_vertices(topo: Topology, rings: int, W: sp.csr_matrix,
+                       used: np.ndarray | None = None) -> np.ndarray:
+    """Vertices more than ``rings`` rings away from the boundary (one-sided averages), among
+    the ``used`` ones (on an edge; default all): a vertex no face uses reads no noise."""
     bnd = np.zeros(topo.n_vertices, bool)
     bnd[topo.edges[topo.boundary].ravel()] = True
+    if used is None:
+        used = np.ones(topo.n_vertices, bool)
     near = bnd.astype(np.float64)
     for _ in range(rings):
         near = np.maximum(near, W @ near)
-    ok = near == 0
-    return ok if ok.sum() >= 16 else ~bnd
+    ok = (near == 0) & used
+    return ok if ok.sum() >= 16 else ~bnd & used
 
 
 def _residual_levels(V, n, W, ks, ok) -> np.ndarray:
@@ -90,15 +96,19 @@ def _residual_levels(V, n, W, ks, ok) -> np.ndarray:
     return np.asarray(out)
 
 
-def _model_profiles(W, ks, ok, n_samples: int = 20_000, seed: int = 0):
-    """``c_k(m)`` (MAD-std of ``(I - W^k) W^m Z``) and ``σ(W^m Z)`` for the candidate ``m``.
+def model_probe(V: np.ndarray, ok: np.ndarray, order: np.ndarray,
+                n_samples: int = 20_000) -> np.ndarray:
+    """The white field ``Z`` of the model profiles: enough standard-normal columns for about
+    ``n_samples`` samples on ``ok`` (one column on a large mesh, at most 8: the MAD of that many
+    samples is within ~1 % of its limit), drawn in the canonical vertex order ``order``
+    (:mod:`meshrepair.mesh.probe`), so a relabelled mesh gets the same field on each vertex."""
+    n_probe = int(np.clip(np.ceil(n_samples / max(int(ok.sum()), 1)), 1, 8))
+    return probe_field(V, n_probe, order=order)
 
-    ``Z`` has enough random columns for about ``n_samples`` interior samples (one column on a
-    large mesh): the MAD of that many samples is within ~1 % of its limit."""
-    rng = np.random.default_rng(seed)
-    n_ok = max(int(ok.sum()), 1)
-    n_probe = int(np.clip(np.ceil(n_samples / n_ok), 1, 8))
-    Z = rng.normal(size=(W.shape[0], n_probe))
+
+def _model_profiles(W, ks, ok, Z):
+    """``c_k(m)`` (MAD-std of ``(I - W^k) W^m Z``) and ``σ(W^m Z)`` for the candidate ``m``,
+    ``Z`` the (nV, p) white field of :func:`model_probe`."""
     C = np.zeros((len(CANDIDATE_STEPS), len(ks)))
     S = np.zeros(len(CANDIDATE_STEPS))
     # W^k (W^m Z) is the (m + k)-th term of the one chain Z, W Z, W² Z, ... (the same products
@@ -150,19 +160,22 @@ def _mad_std(X: np.ndarray, overwrite: bool = False) -> float:
 def _sampled(V, F, topo, rings: int):
     """The inputs of a band read: float64 ``V``, int64 ``F``, the topology, the umbrella operator
     ``W``, the mask of vertices ``rings`` rings inside (an even subsample of at most
-    :data:`MAX_SAMPLES`, every j-th one) and the mean edge length ``ℓ̄``."""
+    :data:`MAX_SAMPLES`, every j-th one in the canonical order), the mean edge length ``ℓ̄`` and
+    the canonical vertex order (:func:`meshrepair.mesh.probe.canonical_order`)."""
     V = np.asarray(V, dtype=np.float64)
     F = np.asarray(F, dtype=np.int64)
     if topo is None:
         topo = edge_topology(F, len(V))
     W = _umbrella_operator(topo)
-    ok = _interior_vertices(topo, rings, W)
-    idx = np.flatnonzero(ok)
+    used = used_vertices(topo.edges, len(V))
+    ok = _interior_vertices(topo, rings, W, used)
+    order = canonical_order(V, used)
+    idx = order[ok[order]]  # the interior vertices in the canonical order
     if len(idx) > MAX_SAMPLES:  # medians over an even subsample (every j-th interior vertex)
         ok = np.zeros_like(ok)
         ok[idx[:: int(np.ceil(len(idx) / MAX_SAMPLES))]] = True
     lbar = float(edge_lengths_exact(V, topo.edges).mean())
-    return V, F, topo, W, ok, lbar
+    return V, F, topo, W, ok, lbar, order
 
 
 def noise_scale(V: np.ndarray, F: np.ndarray, *, reference: np.ndarray | None = None,
@@ -182,10 +195,10 @@ def noise_scale(V: np.ndarray, F: np.ndarray, *, reference: np.ndarray | None = 
     NoiseScale
     """
     ks = SCALES
-    V, F, topo, W, ok, lbar = _sampled(V, F, topo, max(ks))
+    V, F, topo, W, ok, lbar, order = _sampled(V, F, topo, max(ks))
     if not ok.any():  # no vertex far enough inside (a few faces): nothing to read, white
         return NoiseScale(profile=np.zeros(len(ks)), rho=1.0, steps=0, length=0.0, gamma=0.0)
-    C, S = _model_profiles(W, ks, ok)
+    C, S = _model_profiles(W, ks, ok, model_probe(V, ok, order))
     s = _residual_levels(V, vertex_normals(V, F), W, ks, ok)
     if reference is not None:
         R = np.asarray(reference, dtype=np.float64)
@@ -243,7 +256,7 @@ def tangential_ratio(V: np.ndarray, F: np.ndarray, reference: np.ndarray, *,
     if topo is None:
         topo = edge_topology(F, len(V))
     W = _umbrella_operator(topo)
-    ok = _interior_vertices(topo, 2, W)
+    ok = _interior_vertices(topo, 2, W, used_vertices(topo.edges, len(V)))
     n = vertex_normals(np.asarray(reference, dtype=np.float64), F)
     L = V - W @ V
     ln = np.einsum("ij,ij->i", L, n)
