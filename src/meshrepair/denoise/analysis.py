@@ -61,7 +61,8 @@ is memory-bound there, and the reordering measured 1.33 s instead of 1.76 s per 
 coordinate-dependent ordering, which keeps the rotation test exact to rounding)."""
 
 
-def _plan(V, F, *, digest: bool = True, probe_result=None, **options) -> DenoisePlan:
+def _plan(V, F, *, digest: bool = True, probe_result=None, checked=None,
+          **options) -> DenoisePlan:
     """Read ``(V, F)`` and decide (module docstring); returns the plan, runs no main solve.
 
     When the reading finds correlated noise (an automatic Willmore weight above 1: the
@@ -74,8 +75,9 @@ def _plan(V, F, *, digest: bool = True, probe_result=None, **options) -> Denoise
     record the digest of ``(V, F)`` that :func:`~meshrepair.denoise.execute._execute` checks
     (off when the caller runs the plan on these arrays at once). ``probe_result``: a robust
     probe already run on an input of this connectivity and vertex order (:func:`_plan_one`);
-    the plan reads it instead of running its own."""
-    memo: dict = {}  # the readings of this input, shared by the plans made here
+    the plan reads it instead of running its own. ``checked``: the ``(report, topology)`` of
+    :func:`meshrepair.mesh.validate._check_mesh` on these arrays, when the caller has it."""
+    memo: dict = {} if checked is None else {"check": checked}  # the readings of this input
     p = _plan_one(V, F, digest=digest, probe_result=probe_result, memo=memo, **options)
     first, p._state.first_probe = p._state.first_probe, None
     auto = options.get("willmore_weight") is None

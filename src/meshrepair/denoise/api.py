@@ -213,23 +213,59 @@ def denoise(
             raise MeshRepairError(f"with plan=, leave the other options at their defaults "
                                   f"(got {', '.join(sorted(given))}); change the plan instead, "
                                   "e.g. dataclasses.replace(plan, lam=0.2)")
+        sub = _in_use(V, F)
         with heap_allocations():
-            return _unreferenced_kept(_execute(plan, V, F, callback), V, F)
+            if sub is None:
+                return _execute(plan, V, F, callback)
+            return _expanded(_execute(plan, sub[1], sub[2], callback), V, F, sub[0])
+    sub = _checked_in_use(V, F)
     with heap_allocations():
-        return _unreferenced_kept(_denoise(V, F, callback=callback, **options), V, F)
+        if sub is None:
+            return _denoise(V, F, callback=callback, **options)
+        idx, Vc, Fc, checked = sub
+        return _expanded(_denoise(Vc, Fc, callback=callback, checked=checked, **options),
+                         V, F, idx)
 
 
-def _unreferenced_kept(r: DenoiseResult, V: np.ndarray, F: np.ndarray) -> DenoiseResult:
-    """``r`` with the vertices no face uses at their input positions, bit for bit (the
-    validation's promise: no energy term reaches them, and the low-passes of the stages would
-    otherwise pull a vertex without neighbours to the origin)."""
+def _in_use(V: np.ndarray, F: np.ndarray):
+    """``(idx, V[idx], F renumbered)``, the vertices some face uses, when others are in ``V``;
+    None when every vertex is used or ``F`` has an index out of range (the validation refuses
+    it). The denoiser reads and solves on the used vertices only: a vertex no face uses is in
+    no energy term, and must not move a reading (a median, a centroid) of the others."""
+    if F.size == 0 or F.min() < 0 or F.max() >= len(V):
+        return None
     used = np.zeros(len(V), bool)
-    used[np.asarray(F).ravel()] = True
+    used[F.ravel()] = True
     if used.all():
-        return r
-    Vo = np.array(r.V, dtype=np.float64)
-    Vo[~used] = V[~used]
-    return dataclasses.replace(r, V=Vo)
+        return None
+    idx = np.flatnonzero(used)
+    new = np.full(len(V), -1, np.int64)
+    new[idx] = np.arange(len(idx))
+    return idx, V[idx], new[F]
+
+
+def _checked_in_use(V: np.ndarray, F: np.ndarray):
+    """:func:`_in_use` after the validation of the user's arrays (their refusals and warnings
+    in the user's numbering), with ``(report, topology)`` of the used part checked quietly."""
+    from meshrepair.mesh.validate import _check_mesh
+
+    sub = _in_use(V, F)
+    if sub is None:
+        return None
+    _check_mesh(V, F, name="input mesh")
+    idx, Vc, Fc = sub
+    return idx, Vc, Fc, _check_mesh(Vc, Fc, name="input mesh", quiet=True)
+
+
+def _expanded(r: DenoiseResult, V: np.ndarray, F: np.ndarray, idx: np.ndarray) -> DenoiseResult:
+    """The result ``r`` on the used vertices ``idx`` put back in the user's numbering: the
+    vertices no face uses at their input positions bit for bit (the validation's promise), the
+    edges renumbered (same order: the renumbering is monotone), ``M_V`` 1 on the unused ones."""
+    Vo = np.array(V, dtype=np.float64)
+    Vo[idx] = r.V
+    M_V = np.ones(len(V))
+    M_V[idx] = r.M_V
+    return dataclasses.replace(r, V=Vo, F=F, edges=idx[r.edges], M_V=M_V)
 
 
 def plan_denoise(
@@ -272,8 +308,11 @@ def plan_denoise(
 
     options = {k: v for k, v in locals().items() if k in _OPTION_DEFAULTS}
     V, F = as_arrays(V, F)
+    sub = _checked_in_use(V, F)
     with heap_allocations():
-        return _plan(V, F, **options)
+        if sub is None:
+            return _plan(V, F, **options)
+        return _plan(sub[1], sub[2], checked=sub[3], **options)
 
 
 _OPTION_DEFAULTS = {k: p.default for k, p in inspect.signature(plan_denoise).parameters.items()

@@ -62,7 +62,7 @@ class DenoisePlan:
 
     Attributes
     ----------
-    n_vertices, n_faces : the input's size
+    n_vertices, n_faces : the input's size (the vertices some face uses: the others are not read)
     options : the user's options after their checks (``None`` where the reading decides)
     reading : the values read from the input (noise levels, direction, correlation, crease
         support), each computed once

@@ -241,9 +241,12 @@ def check_mesh(V: np.ndarray, F: np.ndarray, *, name: str = "mesh",
     return _check_mesh(V, F, name=name, allow_degenerate=allow_degenerate)[0]
 
 
-def _check_mesh(V, F, *, name: str = "mesh", allow_degenerate: bool = False
-                ) -> tuple[MeshReport, Topology]:
-    """:func:`check_mesh`, also returning the edge topology it built (reused by callers)."""
+def _check_mesh(V, F, *, name: str = "mesh", allow_degenerate: bool = False,
+                quiet: bool = False) -> tuple[MeshReport, Topology]:
+    """:func:`check_mesh`, also returning the edge topology it built (reused by callers);
+    ``quiet``: the warnings are not logged (a caller that already checked the user's arrays
+    and now checks a renumbered copy of them)."""
+    warn = (lambda *args: None) if quiet else logger.warning
     V = _as_vertex_array(V, name)
     F = _as_face_array(F, name)
     _check_shapes(V, F, name)
@@ -350,26 +353,26 @@ def _check_mesh(V, F, *, name: str = "mesh", allow_degenerate: bool = False
                 "mesh.update_faces(mesh.nondegenerate_faces()), pymeshlab "
                 "'meshing_remove_null_faces'), or pass allow_degenerate=True to proceed anyway"
             )
-        logger.warning("%s; proceeding because allow_degenerate=True", msg)
+        warn("%s; proceeding because allow_degenerate=True", msg)
 
     # --- warnings and counts ------------------------------------------------------------------
     n_dup, dups = _duplicate_vertex_count(V)
     if n_dup:
-        logger.warning(
+        warn(
             "%s: %d vertices duplicate the position of another vertex (first: %s); they are kept "
             "(legitimate along seams) but are not connected to each other", name, n_dup,
             _first(dups))
 
     n_unref = int(nV - used.sum())
     if n_unref:
-        logger.warning(
+        warn(
             "%s: %d unreferenced vertices (used by no face; first: %s); they are kept unchanged",
             name, n_unref, _first(np.flatnonzero(~used)))
 
     pinched = _pinched_vertices(F, nV, h1, h2)
     n_pinched = int(pinched.sum())
     if n_pinched:
-        logger.warning(
+        warn(
             "%s: %d non-manifold (pinched) vertices whose faces form more than one fan (first: "
             "%s); processing continues", name, n_pinched, _first(np.flatnonzero(pinched)))
 
