@@ -79,6 +79,30 @@ def test_vertex_order_invariance_on_a_real_scan():
     assert str(a.plan) == str(b.plan)
 
 
+def test_vertices_no_face_uses_are_not_read(spot, caplog):
+    """denoise and plan_denoise read and solve on the used vertices only: a vertex no face uses
+    is returned bit for bit and moves nothing else (the readings are medians and centroids over
+    the vertices), with or without a plan; the edges keep the user's numbering."""
+    V, F = spot
+    Y = add_noise(V, F, 0.2, seed=2)
+    far = np.array([[50.0, -3.0, 8.0], [np.pi, 1e-3, -7.0]])
+    Yx = np.vstack([Y[:10], far[:1], Y[10:], far[1:]])  # two unused vertices, one in the middle
+    Fx = np.where(F >= 10, F + 1, F)
+    ra = denoise(Y, F)
+    caplog.clear()
+    rb = denoise(Yx, Fx)
+    said = [r.getMessage() for r in caplog.records if "unreferenced" in r.getMessage()]
+    assert len(said) == 1 and f"first: [10, {len(Yx) - 1}]" in said[0]  # the user's numbering
+    keep = np.r_[0:10, 11:len(Yx) - 1]
+    assert np.array_equal(rb.V[keep], ra.V)
+    assert np.array_equal(rb.V[[10, -1]], far)
+    assert np.array_equal(rb.F, Fx) and np.array_equal(rb.edges, keep[ra.edges])
+    assert np.array_equal(rb.M_E, ra.M_E) and rb.M_V.shape == (len(Yx),)
+    p = meshrepair.plan_denoise(Yx, Fx)
+    rp = denoise(Yx, Fx, plan=p)
+    assert np.array_equal(rp.V, rb.V) and str(p) == str(meshrepair.plan_denoise(Y, F))
+
+
 def test_inputs_not_modified_and_trimesh_accepted(spot):
     V, F = spot
     Vn = add_noise(V, F, 0.1, seed=1)

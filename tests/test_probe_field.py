@@ -89,28 +89,3 @@ def test_a_vertex_no_face_uses_changes_no_draw_and_no_reading():
     a, b = noise_scale(Vn, F), noise_scale(Vnx, F)
     assert np.array_equal(a.profile, b.profile) and a.steps == b.steps
 
-
-def test_denoise_ignores_vertices_no_face_uses(caplog):
-    """denoise and plan_denoise read and solve on the used vertices only: a vertex no face uses
-    is returned bit for bit and moves nothing else (the readings are medians and centroids over
-    the vertices), with or without a plan; the edges keep the user's numbering."""
-    from meshrepair import denoise, plan_denoise
-
-    V, F = _mesh()
-    Y = add_noise(V, F, 0.2, seed=2)
-    far = np.array([[50.0, -3.0, 8.0], [np.pi, 1e-3, -7.0]])
-    Yx = np.vstack([Y[:10], far[:1], Y[10:], far[1:]])  # two unused vertices, one in the middle
-    Fx = np.where(F >= 10, F + 1, F)
-    ra = denoise(Y, F)
-    caplog.clear()
-    rb = denoise(Yx, Fx)
-    said = [r.getMessage() for r in caplog.records if "unreferenced" in r.getMessage()]
-    assert len(said) == 1 and f"first: [10, {len(Yx) - 1}]" in said[0]  # the user's numbering
-    keep = np.r_[0:10, 11:len(Yx) - 1]
-    assert np.array_equal(rb.V[keep], ra.V)
-    assert np.array_equal(rb.V[[10, -1]], far)
-    assert np.array_equal(rb.F, Fx) and np.array_equal(rb.edges, keep[ra.edges])
-    assert np.array_equal(rb.M_E, ra.M_E) and rb.M_V.shape == (len(Yx),)
-    p = plan_denoise(Yx, Fx)
-    rp = denoise(Yx, Fx, plan=p)
-    assert np.array_equal(rp.V, rb.V) and str(p) == str(plan_denoise(Y, F))
