@@ -6,6 +6,7 @@ import re
 import subprocess
 import sys
 
+import numpy as np
 import pytest
 
 import meshrepair as mr
@@ -149,3 +150,33 @@ def test_first_run_says_it_compiles_and_the_summary_counts_it(tmp_path):
     warm = run("b.ply")  # the same cache, now full
     assert "compiling kernels" not in warm.stderr
     assert "kernel compilation" not in warm.stdout
+
+
+def test_reference_in_another_vertex_order_gives_no_per_vertex_errors(tmp_path, capsys):
+    """The same surface stored with another vertex order (an STL, a re-export) compares by
+    distances only: metrics, report, compare and view give no MSAE / E_V against it (they
+    printed 12380 deg² for a mesh against itself); a reference of zero size gives no relative
+    distances instead of a ZeroDivisionError."""
+    from meshrepair.commands.render import reference_metrics
+
+    m = read_mesh(data_path("fandisk.ply"))
+    p = np.random.default_rng(0).permutation(len(m.V))
+    inv = np.empty_like(p)
+    inv[p] = np.arange(len(p))
+    a, b = tmp_path / "a.ply", tmp_path / "b.ply"
+    mr.write_mesh(a, m.V, m.F)
+    mr.write_mesh(b, m.V[p], inv[m.F])
+    assert reference_metrics(m.V, m.F, m.V[p], inv[m.F]) is None
+    assert reference_metrics(m.V, m.F, m.V, m.F)["MSAE"] < 1e-9
+    assert main(["metrics", str(a), str(b)]) == 0
+    out = capsys.readouterr().out
+    assert "MSAE (deg^2)" not in out and "need the same connectivity" in out
+    assert re.search(r"mean distance\s+[0-9.e-]+", out)
+    assert main(["report", str(a), str(tmp_path / "r.html"), "--reference", str(b)]) == 0
+    page = (tmp_path / "r.html").read_text(encoding="utf-8")
+    assert "MSAE vs reference" not in page and "mean surface distance" in page
+    z = tmp_path / "zero.ply"
+    mr.write_mesh(z, np.zeros_like(m.V), m.F)
+    capsys.readouterr()
+    assert main(["metrics", str(a), str(z)]) == 0
+    assert "bbox diagonal" not in capsys.readouterr().out

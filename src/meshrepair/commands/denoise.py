@@ -143,17 +143,20 @@ def run_noise(args: argparse.Namespace) -> int:
 
 
 def _metrics(V, F, Vr, Fr) -> dict:
-    from meshrepair.metrics import distances, msae, vertex_error
+    from meshrepair.commands.render import reference_metrics
+    from meshrepair.metrics import distances
 
     d = distances(V, F, Vr, Fr)
     out = {}
-    if V.shape == Vr.shape and np.array_equal(F, Fr):
-        out["MSAE (deg^2)"] = msae(V, Vr, F)
-        out["E_V"] = vertex_error(V, Vr)
+    r = reference_metrics(V, F, Vr, Fr)
+    if r is not None:
+        out["MSAE (deg^2)"] = r["MSAE"]
+        out["E_V"] = r["E_V"]
     out["mean distance"] = d["mean"]
     out["Hausdorff distance"] = d["hausdorff"]
-    out["mean distance / bbox diagonal"] = d["mean"] / d["diag"]
-    out["Hausdorff / bbox diagonal"] = d["hausdorff"] / d["diag"]
+    if d["diag"] > 0:  # a reference of zero size has no relative distances
+        out["mean distance / bbox diagonal"] = d["mean"] / d["diag"]
+        out["Hausdorff / bbox diagonal"] = d["hausdorff"] / d["diag"]
     return out
 
 

@@ -84,13 +84,28 @@ def sharp_edges(V: np.ndarray, F: np.ndarray, threshold: float = 30.0) -> np.nda
     return sharp_edge_mask(face_normals(V, F), edge_topology(F, len(V)), threshold) > 0.5
 
 
-def reference_metrics(V: np.ndarray, F: np.ndarray, V_ref: np.ndarray) -> dict[str, float] | None:
-    """MSAE (degrees², face normals over ``F``) and E_V against ``V_ref``; None if nV differs."""
+def reference_metrics(V: np.ndarray, F: np.ndarray, V_ref: np.ndarray,
+                      F_ref: np.ndarray) -> dict[str, float] | None:
+    """MSAE (degrees², face normals over ``F``) and E_V against ``(V_ref, F_ref)``; None unless
+    both have the same vertex count and the same faces (vertex i of one is vertex i of the
+    other: a reference stored with another vertex order compares by distances only)."""
     from meshrepair.metrics import msae, vertex_error
 
-    if V_ref.shape != V.shape:
+    if not same_connectivity(V, F, V_ref, F_ref):
         return None
     return {"MSAE": msae(V, V_ref, F), "E_V": vertex_error(V, V_ref)}
+
+
+def same_connectivity(V, F, V_ref, F_ref) -> bool:
+    """Same vertex count and the same face array: per-vertex and per-face errors are defined."""
+    return V.shape == V_ref.shape and F.shape == F_ref.shape and bool(np.array_equal(F, F_ref))
+
+
+def connectivity_note(V, F, V_ref, F_ref) -> str:
+    """Why :func:`reference_metrics` is None, in a few words."""
+    if len(V) != len(V_ref):
+        return f"{len(V)} vs {len(V_ref)} vertices"
+    return "different faces or vertex order"
 
 
 def _color_options(color: str, mesh: LoadedMesh) -> dict:
@@ -279,9 +294,9 @@ def run_compare(args: argparse.Namespace) -> int:
         ref = load_mesh(args.reference)
         metrics = []
         for m in meshes:
-            r = reference_metrics(m.V, m.F, ref.V)
+            r = reference_metrics(m.V, m.F, ref.V, ref.F)
             if r is None:
-                metrics.append(f"n/a ({len(m.V)} vs {len(ref.V)} vertices)")
+                metrics.append(f"n/a ({connectivity_note(m.V, m.F, ref.V, ref.F)})")
             else:
                 metrics.append(f"MSAE {r['MSAE']:.4g} deg²\nE_V {r['E_V']:.4g}")
     edge_masks = None

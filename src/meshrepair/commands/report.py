@@ -89,20 +89,24 @@ def run_report(args: argparse.Namespace) -> int:
         metrics["input boundary loops"] = len(boundary_loops(inp.F, len(inp.V)))
     if args.reference:
         ref = load_mesh(args.reference)
-        r = reference_metrics(res.V, res.F, ref.V)
+        r = reference_metrics(res.V, res.F, ref.V, ref.F)
         if r is not None:
             metrics["MSAE vs reference (deg²)"] = r["MSAE"]
             metrics["E_V vs reference"] = r["E_V"]
             if inp is not None:
-                r0 = reference_metrics(inp.V, inp.F, ref.V)
+                r0 = reference_metrics(inp.V, inp.F, ref.V, ref.F)
                 if r0 is not None:
                     metrics["input MSAE vs reference (deg²)"] = r0["MSAE"]
                     metrics["input E_V vs reference"] = r0["E_V"]
         t1 = time.perf_counter()
         d = distances(res.V, res.F, ref.V, ref.F)
         timings["report: distances to reference"] = time.perf_counter() - t1
-        metrics["mean surface distance / bbox diagonal"] = d["mean"] / d["diag"]
-        metrics["Hausdorff distance / bbox diagonal"] = d["hausdorff"] / d["diag"]
+        if d["diag"] > 0:  # a reference of zero size has distances but no relative ones
+            metrics["mean surface distance / bbox diagonal"] = d["mean"] / d["diag"]
+            metrics["Hausdorff distance / bbox diagonal"] = d["hausdorff"] / d["diag"]
+        else:
+            metrics["mean surface distance"] = d["mean"]
+            metrics["Hausdorff distance"] = d["hausdorff"]
     metrics.update(run.get("metrics", {}))
 
     masks: dict[str, np.ndarray] = {}

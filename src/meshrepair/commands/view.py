@@ -64,7 +64,7 @@ def run_view(args: argparse.Namespace) -> int:
         metrics["mean edge length"].append(
             float(edge_lengths(m.V, edge_topology(m.F, len(m.V)).edges).mean()))
         if ref is not None:
-            r = reference_metrics(m.V, m.F, ref.V)
+            r = reference_metrics(m.V, m.F, ref.V, ref.F)
             metrics["MSAE vs reference (deg²)"].append(r["MSAE"] if r else "n/a")
             metrics["E_V vs reference"].append(r["E_V"] if r else "n/a")
     write_viewer(out, panes, regions, region_details=details, metrics=metrics,
