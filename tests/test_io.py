@@ -584,3 +584,17 @@ def test_as_arrays_trimesh_and_meshdata():
 def test_as_arrays_errors(args, match):
     with pytest.raises(MeshRepairError, match=match):
         as_arrays(*args)
+
+
+def test_ply_float_face_indices_must_be_whole(tmp_path):
+    """A PLY face list of floats reads when every value is whole and is refused otherwise (it
+    was truncated: ``3 0 1.7 2`` read as the face (0, 1, 2)), as OBJ and OFF refuse it."""
+    head = ("ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+            "property float z\nelement face 1\nproperty list uchar float vertex_indices\n"
+            "end_header\n0 0 0\n1 0 0\n0 1 0\n")
+    ok, bad = tmp_path / "ok.ply", tmp_path / "bad.ply"
+    ok.write_text(head + "3 0 1 2\n")
+    bad.write_text(head + "3 0 1.7 2\n")
+    assert read_mesh(ok).F.tolist() == [[0, 1, 2]]
+    with pytest.raises(MeshRepairError, match="non-integer vertex indices"):
+        read_mesh(bad)

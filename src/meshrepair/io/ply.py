@@ -131,6 +131,19 @@ def _ply_scalar_props(element: Any) -> list[Any]:
     return [p for p in element.properties if not isinstance(p, plyfile.PlyListProperty)]
 
 
+def _whole_indices(a: np.ndarray, name: str) -> np.ndarray:
+    """Vertex indices as int64; a float list property is accepted only with whole values (a
+    fractional index is a broken file, not one to truncate)."""
+    if a.dtype.kind == "f":
+        bad = ~np.isfinite(a) | (a != np.round(a))
+        if bad.any():
+            raise _Bad(f"face property {name!r} holds {int(bad.sum())} non-integer vertex "
+                       f"indices (first: {a[bad][0]!r}); indices must be whole numbers")
+    elif a.dtype.kind not in "iu":
+        raise _Bad(f"face property {name!r} has type {a.dtype}, not integer vertex indices")
+    return a.astype(np.int64)
+
+
 def _read_ply(path: Path) -> MeshData:
     import plyfile
 
@@ -184,10 +197,10 @@ def _read_ply(path: Path) -> MeshData:
         col = face.data[key]
         if col.dtype != object and col.ndim == 2:  # fixed-length (memory-mapped) triangles
             counts = np.full(len(col), col.shape[1], dtype=np.int64)
-            flat = np.asarray(col, dtype=np.int64).ravel()
+            flat = _whole_indices(np.asarray(col).ravel(), key)
         else:
             counts = np.fromiter((len(a) for a in col), dtype=np.int64, count=len(col))
-            flat = (np.concatenate([np.asarray(a, dtype=np.int64) for a in col])
+            flat = (_whole_indices(np.concatenate([np.asarray(a) for a in col]), key)
                     if len(col) else np.empty(0, dtype=np.int64))
         F = _fan_triangulate(flat, counts, str(path))
         per_tri = np.repeat(np.arange(len(counts)), np.maximum(counts - 2, 0))
