@@ -572,3 +572,27 @@ def test_split_ears_keeps_surface_and_orientation():
     _, A3 = face_normals_areas(V3, F3)
     assert A3.sum() == pytest.approx(A2.sum())
     np.testing.assert_array_equal(boundary_loops(F3, len(V3))[0].size, loop.size)
+
+
+def test_ring_counts_beyond_the_mesh_cost_nothing():
+    """Ring dilations stop when they stop growing: a ring count of a million (a typing slip in
+    --strip-rings, rings=) gives what the graph diameter gives, at once, instead of running a
+    million sparse products."""
+    from meshrepair.complete.blend import _strip_fidelity
+    from meshrepair.complete.stitch import _rings
+    from meshrepair.fill.patches import _ring_faces
+    from meshrepair.mesh.topology import edge_topology
+
+    s = trimesh.creation.icosphere(3)
+    V, F = np.asarray(s.vertices), np.asarray(s.faces, np.int64)
+    topo = edge_topology(F, len(V))
+    seeds = np.array([0, 5])
+    n = len(V)  # more rings than the graph's diameter
+    assert np.array_equal(_rings(topo, seeds, 10**6)[_rings(topo, seeds, n) <= n],
+                          _rings(topo, seeds, n)[_rings(topo, seeds, n) <= n])
+    assert _rings(topo, seeds, 10**6).max() < n  # every vertex reached, none "beyond"
+    assert np.array_equal(_ring_faces(F, seeds, n, 10**6), _ring_faces(F, seeds, n, n))
+    gap = np.array([1.0, 2.0])
+    strip = np.ones(n, bool)
+    assert np.array_equal(_strip_fidelity(topo, seeds, gap, strip, 10**6, 0.5),
+                          _strip_fidelity(topo, seeds, gap, strip, n, 0.5))

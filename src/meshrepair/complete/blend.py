@@ -67,8 +67,10 @@ def _strip_fidelity(topo, seam: np.ndarray, gap_l: np.ndarray, strip: np.ndarray
     g = np.zeros(nV)
     g[seam] = gap_l
     for _ in range(int(strip_rings)):
-        nb = A.multiply(g[None, :]).max(axis=1).toarray().ravel()
-        g = np.maximum(g, nb)
+        g_next = np.maximum(g, A.multiply(g[None, :]).max(axis=1).toarray().ravel())
+        if np.array_equal(g_next, g):  # the dilation has stopped growing
+            break
+        g = g_next
     M_V[strip] = weight * np.clip(1.0 - g[strip] / GAP_FREE, 0.0, 1.0)
     return M_V
 

@@ -184,6 +184,8 @@ def _template_context(template, rings: int) -> np.ndarray | None:
     front = inside.astype(np.float64)
     for _ in range(int(rings)):
         new = (A @ front > 0) & ~reached
+        if not new.any():  # the component is reached: more rings add nothing
+            break
         reached |= new
         front = new.astype(np.float64)
     ctx = np.flatnonzero(reached & ~inside)

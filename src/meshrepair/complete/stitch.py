@@ -58,6 +58,8 @@ def _rings(topo, seeds: np.ndarray, max_ring: int) -> np.ndarray:
     front[seeds] = 1.0
     for r in range(1, max_ring + 1):
         reach = (A @ front > 0) & (dist > max_ring)
+        if not reach.any():  # every reachable vertex has its ring: the rest stay beyond
+            break
         dist[reach] = r
         front = reach.astype(np.float64)
     return dist

@@ -21,7 +21,10 @@ def _ring_faces(F: np.ndarray, seed_vertices: np.ndarray, nV: int, rings: int) -
     fm = vm[F].any(axis=1)
     for _ in range(rings):
         vm[F[fm].ravel()] = True
-        fm = vm[F].any(axis=1)
+        grown = vm[F].any(axis=1)
+        if np.array_equal(grown, fm):  # the component is covered: more rings add nothing
+            break
+        fm = grown
     return fm
 
 
