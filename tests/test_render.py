@@ -292,6 +292,28 @@ def test_compare_figure_validates_lists():
         compare_figure([])
 
 
+@pytest.mark.parametrize("kw,msg", [
+    ({"width": 0, "height": 0}, "at least 16"), ({"width": -5, "height": 10}, "at least 16"),
+    ({"width": "abc"}, "width"), ({"supersample": 0}, "supersample"),
+    ({"width": 5000, "height": 5000, "supersample": 3}, "raster pixels"),
+    ({"width": 3000, "height": 3000}, "3 panels"),  # each fits, the figure of three does not
+])
+def test_compare_figure_checks_its_size_before_rendering(kw, msg):
+    """compare_figure applies render_mesh's size rule (render.mesh.check_raster) to each panel
+    and to the figure of all of them, before any raster is allocated."""
+    a = sphere(1)
+    with pytest.raises(MeshRepairError, match=msg):
+        compare_figure([a, a, a], **kw)
+
+
+def test_report_image_size_has_an_upper_bound(tmp_path):
+    from meshrepair.report.page import write_report
+
+    with pytest.raises(MeshRepairError, match="image_size.*raster pixels"):
+        write_report(tmp_path / "r.html", title="t", output_mesh=sphere(1), image_size=100_000)
+    assert list(tmp_path.iterdir()) == []
+
+
 # ------------------------------------------------------------------------------------------
 # CLI
 
@@ -359,9 +381,9 @@ def test_cli_compare_with_reference(tmp_path, capsys):
 
     from meshrepair.commands.render import reference_metrics
 
-    m = reference_metrics(noisy, F, V)
+    m = reference_metrics(noisy, F, V, F)
     assert m["MSAE"] > 0 and m["E_V"] == pytest.approx(np.linalg.norm(noisy - V) / len(V))
-    assert reference_metrics(V, F, V) == pytest.approx({"MSAE": 0.0, "E_V": 0.0}, abs=1e-9)
+    assert reference_metrics(V, F, V, F) == pytest.approx({"MSAE": 0.0, "E_V": 0.0}, abs=1e-9)
     args = _parser().parse_args(["compare", paths[0], str(out), "--titles", "a", "b", "--force"])
     with pytest.raises(MeshRepairError, match="titles"):
         args.func(args)

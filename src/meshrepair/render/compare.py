@@ -30,6 +30,7 @@ from meshrepair.render.figure import (
     _new_figure,
     _panel_colorbar,
 )
+from meshrepair.render.mesh import check_raster
 from meshrepair.render.png import save_png
 from meshrepair.render.raster import _raster, _to_uint8
 
@@ -82,14 +83,14 @@ def compare_figure(
     for bad in ("title", "fit_bounds"):
         if bad in kw:
             raise MeshRepairError(f"compare_figure sets {bad} itself; do not pass it")
-    width = int(kw.pop("width", 600))
-    height = int(kw.pop("height", 600))
+    width, height = kw.pop("width", 600), kw.pop("height", 600)
     colorbar = bool(kw.pop("colorbar", True))
     clip = tuple(kw.pop("clip_percentile", (2.0, 98.0)))
     vmin, vmax = kw.pop("vmin", None), kw.pop("vmax", None)
     shading = kw.pop("shading", "flat")
     _check_shading(shading)
-    supersample = int(kw.pop("supersample", 1))
+    # every panel and the figure that holds them side by side within the raster limit
+    width, height, supersample = check_raster(width, height, kw.pop("supersample", 1), panels=n)
     azimuth, elevation = kw.pop("azimuth", None), kw.pop("elevation", None)
     view_dir, look_at = kw.pop("view_dir", None), kw.pop("look_at", None)
     radius, clip_front = kw.pop("radius", None), bool(kw.pop("clip", True))

@@ -36,6 +36,30 @@ figure), so the limit is about 2.3 GiB."""
 _BYTES_PER_RASTER_PIXEL = 150
 
 
+def check_raster(width, height, supersample=1, *, panels: int = 1,
+                 min_size: int = 16) -> tuple[int, int, int]:
+    """``(width, height, supersample)`` checked: whole numbers, at least ``min_size`` pixels a
+    side, supersample 1-4, and ``panels`` such images within :data:`MAX_RASTER_PIXELS` raster
+    pixels (refused before any work, with the memory it would take)."""
+    from meshrepair.options import check_int
+
+    width, height = check_int("width", width), check_int("height", height)
+    supersample = check_int("supersample", supersample)
+    if width < min_size or height < min_size:
+        raise MeshRepairError(f"image size must be at least {min_size} x {min_size} pixels, got "
+                              f"{width} x {height}")
+    if supersample < 1 or supersample > 4:
+        raise MeshRepairError(f"supersample must be 1, 2, 3 or 4, got {supersample}")
+    raster = int(panels) * width * height * supersample**2
+    if raster > MAX_RASTER_PIXELS:
+        what = f"{panels} panels of " if panels > 1 else "image "
+        raise MeshRepairError(
+            f"{what}{width} x {height} with supersample {supersample} is {raster:,} raster "
+            f"pixels (about {raster * _BYTES_PER_RASTER_PIXEL / 2**30:.1f} GiB); the limit is "
+            f"{MAX_RASTER_PIXELS:,}: choose a smaller size")
+    return width, height, supersample
+
+
 def render_mesh(
     V: np.ndarray,
     F: np.ndarray,
@@ -148,22 +172,11 @@ def render_mesh(
         For malformed meshes, masks or options.
     """
     V, F = _check_mesh(V, F)
-    from meshrepair.options import check_int, check_number
+    from meshrepair.options import check_number
 
-    width, height = check_int("width", width), check_int("height", height)
-    supersample = check_int("supersample", supersample)
+    width, height, supersample = check_raster(width, height, supersample)
     azimuth = check_number("azimuth", azimuth, allow_none=True)
     elevation = check_number("elevation", elevation, allow_none=True)
-    if width < 16 or height < 16:
-        raise MeshRepairError(f"image size must be at least 16 x 16 pixels, got {width} x {height}")
-    if supersample < 1 or supersample > 4:
-        raise MeshRepairError(f"supersample must be 1, 2, 3 or 4, got {supersample}")
-    raster = width * height * supersample**2
-    if raster > MAX_RASTER_PIXELS:
-        raise MeshRepairError(
-            f"image {width} x {height} with supersample {supersample} is {raster:,} raster "
-            f"pixels (about {raster * _BYTES_PER_RASTER_PIXEL / 2**30:.1f} GiB); the limit is "
-            f"{MAX_RASTER_PIXELS:,}: choose a smaller size")
     _check_shading(shading)
     mode = _resolve_color_mode(color_by, scalars)
     values = _scalar_field(V, F, mode, scalars)

@@ -186,9 +186,12 @@ def write_report(
 
     out = _check_pair(output_mesh, "output_mesh")
     inp = _check_pair(input_mesh, "input_mesh") if input_mesh is not None else None
-    size = int(image_size)
-    if size < 64:
-        raise MeshRepairError(f"image_size must be at least 64 pixels, got {image_size}")
+    from meshrepair.render.mesh import check_raster
+
+    try:  # the renders of the page are image_size² each, side by side at most two
+        size = check_raster(image_size, image_size, panels=2, min_size=64)[0]
+    except MeshRepairError as exc:
+        raise MeshRepairError(f"image_size: {exc}") from None
     cam = {"azimuth": azimuth, "elevation": elevation}
     parts: list[str] = []
 
