@@ -598,3 +598,23 @@ def test_ply_float_face_indices_must_be_whole(tmp_path):
     assert read_mesh(ok).F.tolist() == [[0, 1, 2]]
     with pytest.raises(MeshRepairError, match="non-integer vertex indices"):
         read_mesh(bad)
+
+
+def test_indices_beyond_int64_are_refused_clearly(tmp_path):
+    """An index with more digits than int64 holds is a MeshRepairError naming the file, in the
+    OBJ, OFF, vertex-mask and face-selection readers (it was a raw OverflowError)."""
+    from meshrepair.io.masks import read_face_selection
+
+    huge = "99999999999999999999"
+    obj, off = tmp_path / "h.obj", tmp_path / "h.off"
+    obj.write_text(f"v 0 0 0\nv 1 0 0\nv 1 1 0\nf 1 2 {huge}\n")
+    off.write_text(f"OFF\n3 1 0\n0 0 0\n1 0 0\n1 1 0\n3 0 1 {huge}\n")
+    for p in (obj, off):
+        with pytest.raises(MeshRepairError, match=p.name):
+            read_mesh(p)
+    sel = tmp_path / "sel.txt"
+    sel.write_text(f"1 {huge}\n")
+    with pytest.raises(MeshRepairError, match="larger than any"):
+        read_vertex_mask(sel, 10)
+    with pytest.raises(MeshRepairError, match="larger than any"):
+        read_face_selection(sel, 10)

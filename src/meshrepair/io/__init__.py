@@ -121,7 +121,7 @@ def read_mesh(path: PathLike) -> MeshData:
         raise _fail_read(p, exc.strerror or str(exc)) from None
     except MemoryError:
         raise _fail_read(p, "out of memory (corrupt counts in the header?)") from None
-    except (ValueError, IndexError, TypeError) as exc:  # anything the parsers did not foresee
+    except (ValueError, IndexError, TypeError, OverflowError) as exc:  # what the parsers missed
         raise _fail_read(p, f"corrupt file ({type(exc).__name__}: {exc})") from None
     logger.debug("read %s: %d vertices, %d faces", p, mesh.n_vertices, mesh.n_faces)
     return mesh

@@ -153,6 +153,8 @@ def read_vertex_mask(
     tokens = " ".join(ln.split("#", 1)[0] for ln in text.splitlines()).split()
     try:
         vals = np.array(tokens, dtype=np.int64)
+    except OverflowError:
+        raise _fail_read(p, "a vertex index is larger than any can be (2^63 - 1)") from None
     except ValueError:
         bad = next(t for t in tokens if not t.lstrip("+-").isdigit())
         raise _fail_read(p, f"expected integer vertex indices, found {bad!r}") from None
@@ -175,6 +177,9 @@ def read_face_selection(path: str | Path, n_faces: int) -> np.ndarray:
             for t in line.split("#", 1)[0].replace(",", " ").split()]
     try:
         idx = np.array([int(t) for t in toks], dtype=np.int64)
+    except OverflowError:
+        raise MeshRepairError(f"region file {str(p)!r}: a face index is larger than any can be "
+                              f"(2^63 - 1); the mesh has {n_faces} faces") from None
     except ValueError:
         raise MeshRepairError(f"region file {str(p)!r} must hold integer face indices (or give a "
                               ".ply/.npy per-vertex mask instead)") from None

@@ -113,6 +113,8 @@ def _indices(tokens: list[str], counts: np.ndarray, f_pos: list[int], def_pos: n
     lab = "" if what == "vertex" else what + " "
     try:
         idx = np.array(tokens, dtype=np.int64)
+    except OverflowError:
+        raise _Bad(f"a face {lab}index is larger than any vertex index can be (2^63 - 1)") from None
     except ValueError:
         bounds = np.cumsum(counts)
         for j, tok in enumerate(tokens):

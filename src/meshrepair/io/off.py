@@ -83,7 +83,7 @@ def _read_off(path: Path) -> MeshData:
     ftok = [ln.split() for ln in lines[fpos:fpos + nf]]
     try:
         counts = np.array([int(t[0]) for t in ftok], dtype=np.int64)
-    except ValueError:
+    except (ValueError, OverflowError):
         raise _Bad("malformed face line (expected 'k i1 ... ik')") from None
     ok = np.fromiter((len(t) for t in ftok), dtype=np.int64, count=nf) >= counts + 1
     if not ok.all():
@@ -95,8 +95,8 @@ def _read_off(path: Path) -> MeshData:
         else:
             flat = np.array([s for t, c in zip(ftok, counts, strict=True) for s in t[1:c + 1]],
                             dtype=np.int64)
-    except ValueError:
-        raise _Bad("malformed face index (expected integers)") from None
+    except (ValueError, OverflowError):
+        raise _Bad("malformed face index (expected integers below 2^63)") from None
     F = _fan_triangulate(flat, counts, str(path))
     _check_indices(F, len(V))
     extra = len(lines) - (fpos + nf)
