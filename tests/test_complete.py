@@ -484,6 +484,13 @@ def test_load_transform(tmp_path):
         load_transform(p)
     with pytest.raises(MeshRepairError, match="cannot read"):
         load_transform(tmp_path / "missing.txt")
+    # a .npy file is read as an array; binary junk, ragged or non-numeric arrays are refused
+    np.save(tmp_path / "t.npy", T)
+    np.testing.assert_array_equal(load_transform(tmp_path / "t.npy"), T)
+    (tmp_path / "b.txt").write_bytes(b"\x93NUMPY\x01\x00")
+    for bad in (tmp_path / "b.txt", [[1, 2], [3]], ["a"] * 16, np.eye(4) * 1j):
+        with pytest.raises(MeshRepairError, match="16 numbers|array of numbers"):
+            load_transform(bad)
 
 
 # ----------------------------------------------------------------------------------------------

@@ -152,8 +152,8 @@ def add_complete_options(p, *, required: bool = True) -> None:
                    help="M_E on the strip: smooth joint, sharp joint, or dihedral threshold "
                    "(default adaptive)")
     p.add_argument("--transform", metavar="FILE", default=None,
-                   help="text file with a 4x4 matrix (16 numbers, row-major) placing the "
-                   "template; skips the automatic alignment")
+                   help="4x4 matrix placing the template (16 numbers, row-major, as text or a "
+                   ".npy array); skips the automatic alignment")
     p.add_argument("--allow-scale", action="store_true",
                    help="fit a uniform scale too and accept any size ratio")
     p.add_argument("--orientation", choices=ORIENTATIONS, default="template",

@@ -99,7 +99,7 @@ def _compact(V: np.ndarray, F: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 
 def load_transform(path_or_array) -> np.ndarray:
-    """A 4x4 transform from an array or a text file of 16 numbers (row-major).
+    """A 4x4 transform from an array, a ``.npy`` file, or a text file of 16 numbers (row-major).
 
     A 3x4 matrix (12 numbers) is accepted too (last row ``0 0 0 1``).
 
@@ -112,21 +112,22 @@ def load_transform(path_or_array) -> np.ndarray:
     if isinstance(path_or_array, (str, os.PathLike)):
         from meshrepair.io import check_input_file
 
-        check_input_file(path_or_array, "transform ")
+        p = check_input_file(path_or_array, "transform ")
+        need = (f"transform file {str(path_or_array)!r} must hold 16 numbers (a 4x4 matrix, row "
+                "by row, as text or a .npy array)")
         try:
-            with open(path_or_array, encoding="utf-8") as fh:
-                text = fh.read()
-        except OSError as exc:
+            if str(p).lower().endswith(".npy"):
+                vals = _numbers(np.load(p, allow_pickle=False), need)
+            else:
+                with open(p, encoding="utf-8") as fh:
+                    text = fh.read()
+                toks = text.replace(",", " ").replace("[", " ").replace("]", " ").split()
+                vals = _numbers(toks, need)
+        except (OSError, UnicodeDecodeError, ValueError) as exc:
             raise MeshRepairError(f"cannot read transform file {str(path_or_array)!r}: "
-                                  f"{exc.strerror or exc}") from None
-        toks = text.replace(",", " ").replace("[", " ").replace("]", " ").split()
-        try:
-            vals = np.array([float(t) for t in toks])
-        except ValueError:
-            raise MeshRepairError(f"transform file {str(path_or_array)!r} must hold 16 numbers "
-                                  "(a 4x4 matrix, row by row)") from None
+                                  f"{getattr(exc, 'strerror', None) or exc}; {need}") from None
     else:
-        vals = np.asarray(path_or_array, dtype=np.float64).ravel()
+        vals = _numbers(path_or_array, "a transform must be a 4x4 (or 3x4) array of numbers")
     if vals.size == 12:
         vals = np.concatenate([vals, [0.0, 0.0, 0.0, 1.0]])
     if vals.size != 16 or not np.isfinite(vals).all():
@@ -140,6 +141,16 @@ def load_transform(path_or_array) -> np.ndarray:
         raise MeshRepairError("the transform's 3x3 part is singular; give an invertible "
                               "rigid/similarity transform")
     return T
+
+
+def _numbers(values, need: str) -> np.ndarray:
+    """``values`` as a flat float64 array, or MeshRepairError ``need``."""
+    try:
+        if np.iscomplexobj(values):
+            raise TypeError("complex")
+        return np.asarray(values, dtype=np.float64).ravel()
+    except (ValueError, TypeError):
+        raise MeshRepairError(need) from None
 
 
 def _template_arrays(template) -> tuple[np.ndarray, np.ndarray]:
