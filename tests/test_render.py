@@ -349,6 +349,16 @@ def test_cli_render(tmp_path):
     np.save(npy, V[:, 1])
     args = _parser().parse_args(["render", str(src), str(out), "--color", str(npy), "--force"])
     assert args.func(args) == 0
+    # values that are not real numbers are refused, not cast (a warning, or a raw ValueError)
+    for bad in (np.array(["a"] * len(V)), V[:, 1] * 1j):
+        np.save(npy, bad)
+        args = _parser().parse_args(["render", str(src), str(out), "--color", str(npy),
+                                     "--force"])
+        with pytest.raises(MeshRepairError, match="one real number"):
+            args.func(args)
+    # a framing radius the picture cannot resolve is refused, not drawn as a blob
+    with pytest.raises(MeshRepairError, match="below 1e-9"):
+        render_mesh(V, F, look_at=(0, 0, 0), radius=1e-300)
 
 
 def test_cli_refuses_to_overwrite_input(tmp_path):

@@ -119,6 +119,9 @@ def _color_options(color: str, mesh: LoadedMesh) -> dict:
             s = np.load(p, allow_pickle=False)
         except (OSError, ValueError) as exc:
             raise MeshRepairError(f"cannot read {color!r} as a numpy array: {exc}") from exc
+        if s.dtype.kind not in "biuf":  # strings, complex, records: not values to colour by
+            raise MeshRepairError(f"{color!r} holds {s.dtype} values; --color needs one real "
+                                  "number (or bool) per vertex")
         return {"color_by": "scalars", "scalars": np.asarray(s, dtype=np.float64).ravel()}
     if color in mesh.vertex_attributes:
         return {

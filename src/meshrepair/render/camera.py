@@ -113,6 +113,12 @@ def _aim(azimuth, elevation, view_dir, look_at, radius, clip, V=None, F=None):
         raise MeshRepairError("look_at needs radius=<size of the region to frame>") from exc
     if not (np.isfinite(r) and r > 0):
         raise MeshRepairError(f"radius must be a finite number > 0, got {radius}")
+    if V is not None and len(V):
+        diag = float(np.linalg.norm(np.ptp(np.asarray(V, dtype=np.float64), axis=0)))
+        if r < 1e-9 * diag:  # the picture's scale would round away (pixels of ~1e-16 diag)
+            raise MeshRepairError(f"radius {radius} is below 1e-9 of the mesh's size (bounding-box "
+                                  f"diagonal {diag:.4g}): frame a region of at least "
+                                  f"{1e-9 * diag:.3g}")
     pc = axes[:2] @ c
     window = np.stack([pc - r, pc + r])
     near = float(-(c @ axes[2]) - r) if clip else -np.inf
