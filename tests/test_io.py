@@ -618,3 +618,20 @@ def test_indices_beyond_int64_are_refused_clearly(tmp_path):
         read_vertex_mask(sel, 10)
     with pytest.raises(MeshRepairError, match="larger than any"):
         read_face_selection(sel, 10)
+
+
+def test_ply_attribute_names_any_ply_allows(tmp_path):
+    """Face properties named like the writer's own record fields (n, i, m, uv) round-trip, and
+    a non-ASCII name is refused with a MeshRepairError (a PLY header is ASCII), not a raw
+    UnicodeEncodeError."""
+    V, F = _mesh()
+    p = tmp_path / "a.ply"
+    head = read_mesh(write_mesh(p, V, F))
+    head.face_attributes = {n: np.arange(len(F), dtype=np.int32) + k
+                            for k, n in enumerate(("n", "i", "m", "uv"))}
+    q = write_mesh(tmp_path / "b.ply", V, F, like=head)
+    back = read_mesh(q)
+    for k, n in enumerate(("n", "i", "m", "uv")):
+        np.testing.assert_array_equal(back.face_attributes[n], np.arange(len(F)) + k)
+    with pytest.raises(MeshRepairError, match="ASCII"):
+        write_mesh(tmp_path / "c.ply", V, F, vertex_attributes={"größe": np.ones(len(V))})

@@ -245,11 +245,11 @@ def _ply_attr_columns(
     reserved = ("x", "y", "z") if what == "vertex" else ("vertex_indices", "texcoord")
     out: list[tuple[str, np.ndarray, str]] = []
     for name, values in (vertex_attributes or {}).items():
-        if not isinstance(name, str) or not name or any(ch.isspace() for ch in name) \
-                or name in reserved:
+        if not isinstance(name, str) or not name or not name.isascii() \
+                or not name.isprintable() or any(ch.isspace() for ch in name) or name in reserved:
             raise MeshRepairError(
-                f"invalid {what} attribute name {name!r}: use a non-empty name without spaces, "
-                f"other than {', '.join(reserved)}"
+                f"invalid {what} attribute name {name!r}: use a non-empty ASCII name without "
+                f"spaces (a PLY header is ASCII), other than {', '.join(reserved)}"
             )
         a = np.asarray(values)
         if a.ndim == 2 and a.shape[1] == 1:
@@ -305,24 +305,26 @@ def _write_ply(fh: Any, V: np.ndarray, F: np.ndarray, attrs: list[tuple[str, np.
         header.append("property list uchar float texcoord")
     header.append("end_header")
     fh.write(("\n".join(header) + "\n").encode("ascii"))
+    # the records' field names are positional (the header carries the user's names, which may
+    # be anything PLY allows, e.g. "n" or "i" for a face property)
     cs = np.dtype(coord).newbyteorder("<").str
     vdtype = [("x", cs), ("y", cs), ("z", cs)]
-    vdtype += [(n, a.dtype.newbyteorder("<").str) for n, a, _ in attrs]
+    vdtype += [(f"a{k}", a.dtype.newbyteorder("<").str) for k, (_, a, _) in enumerate(attrs)]
     vrec = np.empty(len(V), dtype=vdtype)
     vrec["x"], vrec["y"], vrec["z"] = V[:, 0], V[:, 1], V[:, 2]
-    for n, a, _ in attrs:
-        vrec[n] = a
-    fdtype = [("n", "u1"), ("i", "<i4", (3,))]
-    fdtype += [(n, a.dtype.newbyteorder("<").str) for n, a, _ in face_attrs]
+    for k, (_, a, _) in enumerate(attrs):
+        vrec[f"a{k}"] = a
+    fdtype = [("count", "u1"), ("indices", "<i4", (3,))]
+    fdtype += [(f"a{k}", a.dtype.newbyteorder("<").str) for k, (_, a, _) in enumerate(face_attrs)]
     if corner_uv is not None:
-        fdtype += [("m", "u1"), ("uv", "<f4", (6,))]
+        fdtype += [("uv_count", "u1"), ("uv", "<f4", (6,))]
     frec = np.empty(len(F), dtype=fdtype)
-    frec["n"] = 3
-    frec["i"] = F
-    for n, a, _ in face_attrs:
-        frec[n] = a
+    frec["count"] = 3
+    frec["indices"] = F
+    for k, (_, a, _) in enumerate(face_attrs):
+        frec[f"a{k}"] = a
     if corner_uv is not None:
-        frec["m"] = 6
+        frec["uv_count"] = 6
         frec["uv"] = corner_uv
     if binary:
         fh.write(vrec.tobytes())
