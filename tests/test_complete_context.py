@@ -140,6 +140,8 @@ def test_strip_fidelity_follows_the_seam_gap(fandisk):
     assert (res.M_V[res.strip_vertices] == 0).all()  # the paper's free strip
     with pytest.raises(MeshRepairError, match="strip_fidelity"):
         complete(V, F, faces, (VP, FP), strip_fidelity=-1)
+    with pytest.raises(MeshRepairError, match="strip_fidelity"):
+        complete(V, F, faces, (VP, FP), strip_fidelity="x")
 
 
 # ----------------------------------------------------------------------------------------------
@@ -239,6 +241,8 @@ def test_mirror_completion_is_refused_on_a_non_symmetric_mesh(fandisk):
         complete(V, F, faces, "mirror")
     with pytest.raises(MeshRepairError, match="max_symmetry_residual"):
         complete(V, F, faces, "mirror", max_symmetry_residual=0)
+    with pytest.raises(MeshRepairError, match="max_symmetry_residual"):
+        complete(V, F, faces, "mirror", max_symmetry_residual="x")
     with pytest.raises(MeshRepairError, match="'mirror'"):
         complete(V, F, faces, "mirrored")
 

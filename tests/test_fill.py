@@ -211,6 +211,28 @@ def test_cut_and_refill_cad_model(fandisk, where, radius):
 
 
 @needs_meshes
+def test_relabelled_mesh_gets_the_same_patches(fandisk):
+    """fill_holes on a relabelled copy (vertices and faces shuffled) makes the same patches and
+    lists the same holes in the same order: each loop starts at its vertex first in the
+    canonical vertex order (holes.detect), not at the first boundary edge of the face list."""
+    from meshrepair.synthetic import cut_holes
+
+    V, F = fandisk
+    Vc, Fc, _, _ = cut_holes(V, F, 8.0, seed=0)
+    a = fill_holes(Vc, Fc)
+    rng = np.random.default_rng(1)
+    p = rng.permutation(len(Vc))
+    inv = np.empty_like(p)
+    inv[p] = np.arange(len(p))
+    b = fill_holes(Vc[p], inv[Fc][rng.permutation(len(Fc))])
+    assert len(b.V) == len(a.V) > len(Vc) and len(b.F) == len(a.F)
+    assert np.array_equal(b.V[inv], a.V[:len(Vc)])
+    diag = np.linalg.norm(Vc.max(axis=0) - Vc.min(axis=0))
+    assert cKDTree(a.V[len(Vc):]).query(b.V[len(Vc):])[0].max() < 1e-9 * diag
+    assert [h.length for h in b.holes] == pytest.approx([h.length for h in a.holes], rel=1e-12)
+    assert [p[h.loop[0]] for h in b.holes] == [h.loop[0] for h in a.holes]
+
+
 def test_hole_wrapping_a_thin_wall_is_filled_by_the_minimum_weight_fallback(fandisk,
                                                                            monkeypatch, caplog):
     """A disc of radius 16 edges cut at the rim of fandisk's thin fin wraps round the wall. No
@@ -475,6 +497,16 @@ def test_inpaint_bad_regions():
         inpaint(V, F, ("cylinder", (0, 0, 0), 1.0))
     with pytest.raises(MeshRepairError, match="out of range"):
         inpaint(V, F, [0, 1, 1000])
+    with pytest.raises(MeshRepairError, match="single value"):
+        inpaint(V, F, 5)
+    with pytest.raises(MeshRepairError, match="invalid region of type list"):
+        inpaint(V, F, [[1, 2], [3]])
+    with pytest.raises(MeshRepairError, match="file not found"):
+        inpaint(V, F, "no_such_mask.npy")
+    # a list spelling of a sphere is the tuple's region
+    c = V[len(V) // 2]
+    a, b = inpaint(V, F, ("sphere", c, 1.5)), inpaint(V, F, ["sphere", c, 1.5])
+    assert np.array_equal(a.V, b.V) and np.array_equal(a.F, b.F)
 
 
 # ------------------------------------------------------------------------------------------------

@@ -246,13 +246,9 @@ def complete(
     check_callable("callback", callback)
     if strip_fidelity is None:
         strip_fidelity = 16.0 if mode == "adaptive" else 0.0
-    if not (np.isfinite(strip_fidelity) and strip_fidelity >= 0):
-        raise MeshRepairError(f"strip_fidelity must be a finite number >= 0, got "
-                              f"{strip_fidelity}")
-    strip_fidelity = float(strip_fidelity)
-    if not (np.isfinite(max_symmetry_residual) and max_symmetry_residual > 0):
-        raise MeshRepairError(f"max_symmetry_residual must be a number > 0 (mean edge lengths), "
-                              f"got {max_symmetry_residual}")
+    strip_fidelity = check_number("strip_fidelity", strip_fidelity, low=0)
+    max_symmetry_residual = check_number("max_symmetry_residual (mean edge lengths)",
+                                         max_symmetry_residual, low=0, low_open=True)
 
     # ---- inputs -------------------------------------------------------------------------------
     V, F = as_arrays(V, F)

@@ -22,7 +22,9 @@ def region_mask(V: np.ndarray, region) -> np.ndarray:
         * a bool array of length nV (or a 0/1 array of length nV);
         * integer vertex indices;
         * ``("sphere", center, radius)``: vertices with ``|v - center| <= radius``;
-        * ``("box", lo, hi)``: vertices with ``lo <= v <= hi`` component-wise.
+        * ``("box", lo, hi)``: vertices with ``lo <= v <= hi`` component-wise (a list
+          ``["sphere", center, radius]`` is read as the tuple);
+        * a path to a mask file (:func:`meshrepair.io.read_vertex_mask`).
 
     Returns
     -------
@@ -30,6 +32,8 @@ def region_mask(V: np.ndarray, region) -> np.ndarray:
     """
     V = np.asarray(V, dtype=np.float64)
     nV = len(V)
+    if isinstance(region, list) and region and isinstance(region[0], str):
+        region = tuple(region)  # ["sphere", c, r] as ("sphere", c, r)
     if isinstance(region, tuple) and len(region) >= 1 and isinstance(region[0], str):
         kind = region[0].lower()
         try:
@@ -50,9 +54,21 @@ def region_mask(V: np.ndarray, region) -> np.ndarray:
         raise MeshRepairError(
             f"invalid region {region!r}: use ('sphere', (x, y, z), radius > 0) or "
             "('box', (x0, y0, z0), (x1, y1, z1)) with x0 <= x1, y0 <= y1, z0 <= z1")
+    import os
+
     from meshrepair.io import read_vertex_mask
 
-    return read_vertex_mask(np.asarray(region), nV)
+    if isinstance(region, (str, os.PathLike)):  # a mask file (.ply, .npy or indices as text)
+        return read_vertex_mask(region, nV)
+    try:
+        arr = np.asarray(region)
+    except ValueError:
+        arr = None
+    if arr is None or arr.dtype == object:
+        raise MeshRepairError(
+            f"invalid region of type {type(region).__name__}: give a per-vertex bool mask, vertex "
+            "indices, a mask file, ('sphere', (x, y, z), radius) or ('box', lo, hi)")
+    return read_vertex_mask(arr, nV)
 
 
 def _remove_region(F: np.ndarray, nV: int, vmask: np.ndarray, max_rounds: int = 20,

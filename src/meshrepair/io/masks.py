@@ -20,6 +20,10 @@ _NOT_A_MASK = {"nx", "ny", "nz", "red", "green", "blue", "alpha", "r", "g", "b",
 def _mask_from_values(vals: np.ndarray, n_vertices: int, source: str) -> np.ndarray:
     """Bool mask from a per-vertex 0/1 array or from a list of vertex indices."""
     vals = np.asarray(vals)
+    if vals.ndim == 0:
+        raise MeshRepairError(f"{source}: expected a per-vertex mask or a list of vertex "
+                              f"indices, got the single value {vals.item()!r} (for one vertex, "
+                              "give a list of one index)")
     if vals.ndim == 2 and 1 in vals.shape:
         vals = vals.ravel()
     if vals.ndim > 1:
