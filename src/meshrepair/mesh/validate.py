@@ -351,7 +351,7 @@ def _check_mesh(V, F, *, name: str = "mesh", allow_degenerate: bool = False,
             raise MeshRepairError(
                 msg + "; remove or collapse them first (e.g. trimesh "
                 "mesh.update_faces(mesh.nondegenerate_faces()), pymeshlab "
-                "'meshing_remove_null_faces'), or pass allow_degenerate=True to proceed anyway"
+                "'meshing_remove_null_faces')"
             )
         warn("%s; proceeding because allow_degenerate=True", msg)
 
