@@ -167,7 +167,7 @@ def test_zero_area_faces_refused_or_warned(caplog):
     V2 = V.copy()
     V2[15] = V2[14]  # coincident corners (distinct indices): face [10, 14, 15] has zero area
     with pytest.raises(MeshRepairError, match=r"zero-area \(degenerate\) faces.*first faces: "
-                       r"\[.*\].*allow_degenerate=True"):
+                       r"\[.*\].*remove or collapse them"):
         check_mesh(V2, F)
     n_expected = int(np.sum([np.isin(15, f) and np.isin(14, f) for f in F]))
     with caplog.at_level(logging.WARNING, logger="meshrepair.mesh.validate"):
