@@ -158,6 +158,17 @@ def test_non_regular_output_is_refused_even_with_force(tmp_path, files, capsys):
     assert "directory" in capsys.readouterr().err
 
 
+def test_dangling_symlink_output_is_refused_before_any_work(tmp_path, files, capsys):
+    """An output name taken by a link to nothing is an existing name: refused at once without
+    --force (the whole repair ran, then the final link step failed with 'it appeared while
+    writing'); with --force the link itself is replaced by the file."""
+    dang = tmp_path / "dang.ply"
+    dang.symlink_to(tmp_path / "nothere.ply")
+    _refused(capsys, ["noise", str(files["in"]), str(dang)], tmp_path, "dangling symbolic link")
+    assert main(["noise", str(files["in"]), str(dang), "--force"]) == 0
+    assert dang.is_file() and not dang.is_symlink() and not (tmp_path / "nothere.ply").exists()
+
+
 def test_too_long_output_path_is_a_clear_error(tmp_path, files, capsys):
     out = tmp_path / ("x" * 300 + ".ply")
     assert main(["noise", str(files["in"]), str(out)]) == 2

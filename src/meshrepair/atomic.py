@@ -55,6 +55,10 @@ def check_writable(path: str | os.PathLike, *, overwrite: bool = True) -> Path:
         st = os.stat(p)
     except FileNotFoundError:
         st = None
+        if os.path.islink(p) and not overwrite:  # the name is taken by a link to nothing
+            raise MeshRepairError(f"cannot write '{p}': it is a dangling symbolic link (to "
+                                  f"'{os.readlink(p)}'); pass overwrite=True / --force to "
+                                  "replace the link, or choose another name") from None
     except OSError as exc:  # name too long, not a directory, permission, loop, ...
         raise MeshRepairError(f"cannot write '{p}': {_os_message(exc)}") from None
     if st is not None:
