@@ -695,3 +695,22 @@ def test_solve_options_are_the_shared_keywords_of_fill_holes_and_inpaint():
     shared = set(a) & set(b) - {"keep_border"}  # a selection option of each task, not solved
     assert shared == set(SOLVE_OPTIONS)
     assert all(a[n] == b[n] for n in shared)
+
+
+def test_inpaint_replaces_degenerate_faces_inside_its_region():
+    """Zero-area faces are refused outside the region to inpaint, and accepted inside it (they
+    are the damage inpaint replaces): the result has no degenerate face."""
+    from meshrepair.mesh.validate import check_mesh
+
+    V, F = grid(10)
+    V = V.copy()
+    c = int(np.argmin(np.linalg.norm(V - V.mean(axis=0), axis=1)))
+    nb = F[(F == c).any(axis=1)][0]
+    V[nb[1]] = V[nb[0]]  # a collapsed edge: its two faces have zero area, next to vertex c
+    with pytest.raises(MeshRepairError, match="zero-area"):
+        check_mesh(V, F)
+    res = inpaint(V, F, ("sphere", V[c], 1.5))
+    check_mesh(res.V, res.F)  # no degenerate face left
+    far = int(np.argmax(np.linalg.norm(V - V[c], axis=1)))
+    with pytest.raises(MeshRepairError, match="zero-area"):
+        inpaint(V, F, ("sphere", V[far], 1.5))

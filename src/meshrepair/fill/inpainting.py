@@ -87,13 +87,17 @@ def inpaint(
     opts = _solve_options(locals())
     from meshrepair.holes import _find_holes
     from meshrepair.mesh.array_contract import as_arrays
-    from meshrepair.mesh.validate import check_mesh
+    from meshrepair.mesh.validate import _check_mesh
 
     V, F = as_arrays(V, F)
-    check_mesh(V, F, name="input mesh")
+    vmask = region_mask(V, region)
+    # faces touching the region are removed and rebuilt: degenerate ones there are the damage
+    # (with keep_border, faces along the border stay: then every face must be valid)
+    inside = (vmask[F].any(axis=1) if F.ndim == 2 and F.size and F.min() >= 0
+              and F.max() < len(V) and keep_border is False else None)
+    _check_mesh(V, F, name="input mesh", replaced=inside)
     opts = _check_options(opts)
     nV, _nF = len(V), len(F)
-    vmask = region_mask(V, region)
     if not vmask.any():
         raise MeshRepairError("the inpainting region contains no vertex of the mesh; check its "
                               "position and size (coordinates are in mesh units)")

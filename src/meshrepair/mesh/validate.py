@@ -242,10 +242,12 @@ def check_mesh(V: np.ndarray, F: np.ndarray, *, name: str = "mesh",
 
 
 def _check_mesh(V, F, *, name: str = "mesh", allow_degenerate: bool = False,
-                quiet: bool = False) -> tuple[MeshReport, Topology]:
+                quiet: bool = False, replaced: np.ndarray | None = None
+                ) -> tuple[MeshReport, Topology]:
     """:func:`check_mesh`, also returning the edge topology it built (reused by callers);
     ``quiet``: the warnings are not logged (a caller that already checked the user's arrays
-    and now checks a renumbered copy of them)."""
+    and now checks a renumbered copy of them); ``replaced``: (nF,) bool, faces the caller
+    removes and rebuilds (an inpainted region): degenerate ones among them are accepted."""
     warn = (lambda *args: None) if quiet else logger.warning
     V = _as_vertex_array(V, name)
     F = _as_face_array(F, name)
@@ -340,6 +342,8 @@ def _check_mesh(V, F, *, name: str = "mesh", allow_degenerate: bool = False,
     mean_len = float(edge_lengths(V, edges).mean())
     degenerate = (area2 <= DEGENERATE_SHAPE_TOL * lmax2) | (
         area2 <= DEGENERATE_SCALE_TOL * mean_len**2)
+    if replaced is not None:  # the damage the caller replaces may hold degenerate faces
+        degenerate &= ~np.asarray(replaced, bool)
     n_degenerate = int(degenerate.sum())
     if n_degenerate:
         bad = np.flatnonzero(degenerate)
