@@ -211,28 +211,6 @@ def test_cut_and_refill_cad_model(fandisk, where, radius):
 
 
 @needs_meshes
-def test_relabelled_mesh_gets_the_same_patches(fandisk):
-    """fill_holes on a relabelled copy (vertices and faces shuffled) makes the same patches and
-    lists the same holes in the same order: each loop starts at its vertex first in the
-    canonical vertex order (holes.detect), not at the first boundary edge of the face list."""
-    from meshrepair.synthetic import cut_holes
-
-    V, F = fandisk
-    Vc, Fc, _, _ = cut_holes(V, F, 8.0, seed=0)
-    a = fill_holes(Vc, Fc)
-    rng = np.random.default_rng(1)
-    p = rng.permutation(len(Vc))
-    inv = np.empty_like(p)
-    inv[p] = np.arange(len(p))
-    b = fill_holes(Vc[p], inv[Fc][rng.permutation(len(Fc))])
-    assert len(b.V) == len(a.V) > len(Vc) and len(b.F) == len(a.F)
-    assert np.array_equal(b.V[inv], a.V[:len(Vc)])
-    diag = np.linalg.norm(Vc.max(axis=0) - Vc.min(axis=0))
-    assert cKDTree(a.V[len(Vc):]).query(b.V[len(Vc):])[0].max() < 1e-9 * diag
-    assert [h.length for h in b.holes] == pytest.approx([h.length for h in a.holes], rel=1e-12)
-    assert [p[h.loop[0]] for h in b.holes] == [h.loop[0] for h in a.holes]
-
-
 def test_hole_wrapping_a_thin_wall_is_filled_by_the_minimum_weight_fallback(fandisk,
                                                                            monkeypatch, caplog):
     """A disc of radius 16 edges cut at the rim of fandisk's thin fin wraps round the wall. No
