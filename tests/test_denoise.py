@@ -64,6 +64,7 @@ def test_invariance_rotation_translation_scale(spot):
     assert np.mean(r.M_E == r2.M_E) > 0.999
 
 
+@pytest.mark.shared
 def test_vertex_order_invariance_on_a_real_scan():
     """A relabelled real depth-camera scan (low-frequency noise: the readings' random probes
     decide its plan) gives the relabelled result, to rounding: the probes are drawn in a
