@@ -134,6 +134,35 @@ def test_ctrl_c_stops_cleanly(tmp_path, monkeypatch, save):
         assert rc == 130 and not out.exists()
 
 
+@pytest.mark.parametrize("save", [False, True])
+def test_ctrl_c_during_fill_writes_nothing(tmp_path, monkeypatch, save):
+    """fill (and inpaint, the same path) as denoise: Ctrl-C during the solve writes nothing and
+    exits 130 (it wrote the partial iterate and exited 0), unless --save-on-interrupt."""
+    import meshrepair as mr
+    from meshrepair.commands import common
+
+    V, F = bundled_mesh("spot.ply")
+    cut = np.linalg.norm(V[F].mean(axis=1) - V[1500], axis=1) < 0.12
+    holed, out = tmp_path / "holed.ply", tmp_path / "filled.ply"
+    mr.write_mesh(holed, V, F[~cut])
+    calls = {"n": 0}
+    orig = common.ProgressBar.__call__
+
+    def interrupt_at_3(self, entry):
+        calls["n"] += 1
+        if calls["n"] == 3:
+            raise KeyboardInterrupt
+        orig(self, entry)
+
+    monkeypatch.setattr(common.ProgressBar, "__call__", interrupt_at_3)
+    rc = main(["fill", str(holed), str(out), "-q"] + (["--save-on-interrupt"] if save else []))
+    assert calls["n"] >= 3  # the solve was interrupted
+    if save:
+        assert rc == 0 and out.exists()
+    else:
+        assert rc == 130 and not out.exists()
+
+
 @pytest.mark.parametrize("fitted", [False, True])
 def test_fill_fitted_flag_matches_the_library(tmp_path, fitted):
     """``fill --fitted`` passes ``fitted=True`` to :func:`meshrepair.fill_holes`: the file it

@@ -127,12 +127,19 @@ def _expand(value, inp: Path):
 # the four tasks: (input mesh, output (V, F), metrics); each calls the public function
 
 
+def _solved(res):
+    """``res`` unless its solve was interrupted (Ctrl-C): a partial iterate is not written."""
+    if getattr(res, "stop_reason", "") == "interrupted":
+        raise MeshRepairError("interrupted: nothing written for this mesh")
+    return res
+
+
 def _denoise(m, out: Path, opts: dict):
     from meshrepair import denoise
     from meshrepair.io import write_like_input
 
     save_mask = opts.pop("save_mask", False)
-    r = denoise(m.V, m.F, **opts)
+    r = _solved(denoise(m.V, m.F, **opts))
     attrs = {}
     if save_mask:
         sharp_v = np.zeros(len(r.V), np.uint8)
@@ -155,7 +162,7 @@ def _fill(m, out: Path, opts: dict):
     from meshrepair import fill_holes
     from meshrepair.io import write_like_input
 
-    res = fill_holes(m.V, m.F, **opts)
+    res = _solved(fill_holes(m.V, m.F, **opts))
     write_like_input(out, m, res, extra={"filled": res.filled_mask})
     return res.V, res.F, _fill_metrics(res)
 
@@ -166,7 +173,7 @@ def _inpaint(m, out: Path, opts: dict):
     from meshrepair.io import write_like_input
 
     region = resolve_region(opts.pop("region", None), opts.pop("attribute", None), len(m.V))
-    res = inpaint(m.V, m.F, region, **opts)
+    res = _solved(inpaint(m.V, m.F, region, **opts))
     write_like_input(out, m, res, extra={"filled": res.filled_mask})
     return res.V, res.F, _fill_metrics(res)
 
@@ -186,7 +193,7 @@ def _complete(m, out: Path, opts: dict):
     kw = {k: opts.pop(k, None) for k in ("region", "hole", "template_region")}
     tmesh = read_mesh(tpath) if tpath is not None else None
     template, kw = complete_arguments(m, tmesh, {**kw, **opts})
-    res = complete(m.V, m.F, template=template, **kw)
+    res = _solved(complete(m.V, m.F, template=template, **kw))
     write_like_input(out, m, res, extra=output_attributes(res, out), template=tmesh,
                      template_map=template_vertex_map(tmesh, template, res))
     c = res.correspondence

@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import argparse
 import logging
+import sys
 import time
 from pathlib import Path
 
@@ -59,6 +60,10 @@ def run_complete(args: argparse.Namespace) -> int:
     finally:
         bar.close()
     t_solve = time.perf_counter() - t0 - t_read
+    if res.stop_reason == "interrupted" and not args.save_on_interrupt:
+        print("interrupted: nothing written (pass --save-on-interrupt to keep the current "
+              "iterate of the blend)", file=sys.stderr)
+        return 130
     write_like_input(out, mesh, res, extra=output_attributes(res, out), force=args.force,
                      template=tmesh, template_map=template_vertex_map(tmesh, template, res))
     c = res.correspondence
@@ -204,6 +209,8 @@ def register(subparsers) -> None:
                    help="write history, parameters, timings and correspondence as JSON "
                    "(readable by 'meshrepair report --log')")
     p.add_argument("--force", action="store_true", help="overwrite OUTPUT if it exists")
+    p.add_argument("--save-on-interrupt", action="store_true",
+                   help="on Ctrl-C during the blend, write the current iterate instead of nothing")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
     from meshrepair.commands.common import add_report_option
 

@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import argparse
 import logging
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -142,6 +143,10 @@ def _solve_and_write(args: argparse.Namespace, m, paths: tuple, desc: str, solve
         holes_bar.close()
         if bar is not None:
             bar.close()
+    if res.stop_reason == "interrupted" and not args.save_on_interrupt:
+        print(f"interrupted: nothing written (pass --save-on-interrupt to keep the current "
+              f"iterate of the {desc} solve)", file=sys.stderr)
+        return 130
     print(res.summary())
     _write(out, m, res, log_path, {"input": args.input}, args.force)
     print(f"wrote {out} ({len(res.V)} vertices, {len(res.F)} faces, {res.timings['total']:.2f} s)")
@@ -241,6 +246,8 @@ def inpaint_options(args: argparse.Namespace) -> dict:
 def _common(p: argparse.ArgumentParser) -> None:
     add_solve_options(p)
     p.add_argument("--force", action="store_true", help="overwrite OUT if it exists")
+    p.add_argument("--save-on-interrupt", action="store_true",
+                   help="on Ctrl-C during the solve, write the current iterate instead of nothing")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
     from meshrepair.commands.common import add_report_option
 
