@@ -180,3 +180,18 @@ def test_reference_in_another_vertex_order_gives_no_per_vertex_errors(tmp_path, 
     capsys.readouterr()
     assert main(["metrics", str(a), str(z)]) == 0
     assert "bbox diagonal" not in capsys.readouterr().out
+
+
+def test_library_warnings_are_not_printed_without_logging_configured():
+    """A program that does not configure logging sees no meshrepair warning on stderr (Python's
+    last-resort handler printed them); the records still reach configured handlers."""
+    code = ("import numpy as np, trimesh, meshrepair as mr\n"
+            "s = trimesh.creation.icosphere(2)\n"
+            "V = np.vstack([s.vertices, [[9.0, 9.0, 9.0]]])\n"  # an unused vertex: a warning
+            "mr.find_holes(V, np.asarray(s.faces))\n")
+    quiet = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                           timeout=120)
+    assert quiet.returncode == 0 and quiet.stderr == "", quiet.stderr
+    loud = subprocess.run([sys.executable, "-c", "import logging; logging.basicConfig()\n" + code],
+                          capture_output=True, text=True, timeout=120)
+    assert "unreferenced" in loud.stderr

@@ -11,8 +11,14 @@ Public API::
     out = carry_attributes(read_mesh(p), r)  # the file's colours, UVs, materials on the result
 """
 
+import logging as _logging
 import sys as _sys
 import types as _types
+
+# A library logs and never prints: without this handler Python's last-resort handler writes every
+# warning of an unconfigured program to stderr. The CLI and applications configure their own
+# (the records still propagate to the root logger's handlers).
+_logging.getLogger("meshrepair").addHandler(_logging.NullHandler())
 
 # The public names are imported on first use (PEP 562), so that ``import meshrepair`` (and the
 # CLI's start-up, ``meshrepair --version``) does not load numba, scipy.sparse and every task;
