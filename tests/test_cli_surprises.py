@@ -195,3 +195,22 @@ def test_library_warnings_are_not_printed_without_logging_configured():
     loud = subprocess.run([sys.executable, "-c", "import logging; logging.basicConfig()\n" + code],
                           capture_output=True, text=True, timeout=120)
     assert "unreferenced" in loud.stderr
+
+
+def test_metrics_json_stays_json_and_noise_refuses_unreadable_levels(tmp_path, capsys):
+    """metrics --json prints one JSON document on stdout (its note about connectivity goes to
+    stderr); noise refuses a level whose result no command would read (1e300 wrote coordinates
+    of 3.7e299, then metrics printed overflow warnings and NaN)."""
+    import json
+
+    a = data_path("fandisk.ply")
+    b = tmp_path / "b.ply"
+    m = read_mesh(a)
+    mr.write_mesh(b, m.V[::-1].copy(), len(m.V) - 1 - m.F)  # the same mesh, numbered backwards
+    assert main(["metrics", "--json", str(a), str(b)]) == 0
+    cap = capsys.readouterr()
+    vals = json.loads(cap.out)
+    assert "mean distance" in vals and "same connectivity" in cap.err
+    out = tmp_path / "n.ply"
+    assert main(["noise", str(a), str(out), "--gamma", "1e300"]) == 2
+    assert "beyond" in capsys.readouterr().err and not out.exists()

@@ -168,12 +168,18 @@ def write_json(path: str | os.PathLike, data: Any, *, overwrite: bool = True) ->
     p = Path(path)
     if p.suffix.lower() != ".json":
         raise MeshRepairError(f"cannot write '{p}': a JSON log must have a .json name")
-    # NaN and infinities are not JSON (strict parsers, jq and JavaScript refuse them): null
-    plain = _finite(json.loads(json.dumps(data, default=_jsonable)))
-    text = json.dumps(plain, indent=1, allow_nan=False)
+    text = json_text(data, indent=1)
     with atomic_write(p, "w", overwrite=overwrite) as fh:
         fh.write(text)
     return p
+
+
+def json_text(data: Any, **kw) -> str:
+    """``data`` as strict JSON text (``json.dumps`` keywords ``kw``): numpy arrays and scalars
+    converted, NaN and infinities written as null (strict parsers, jq and JavaScript refuse
+    them)."""
+    plain = _finite(json.loads(json.dumps(data, default=_jsonable)))
+    return json.dumps(plain, allow_nan=False, **kw)
 
 
 def _finite(x: Any) -> Any:

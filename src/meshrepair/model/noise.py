@@ -51,7 +51,15 @@ def add_noise(V: np.ndarray, F: np.ndarray, gamma: float, *, direction: str = "n
     else:
         d = rng.normal(size=(len(V), 3))
         d /= np.linalg.norm(d, axis=1, keepdims=True)
-    return V + eta[:, None] * d
+    out = V + eta[:, None] * d
+    from meshrepair.mesh.validate import COORDINATE_RANGE
+
+    top = float(np.abs(out).max()) if out.size else 0.0
+    if not top <= COORDINATE_RANGE[1]:  # a mesh no command of the package would read
+        raise MeshRepairError(f"gamma={gamma:g} moves vertices to |x| = {top:.3g}, beyond the "
+                              f"{COORDINATE_RANGE[1]:g} the package reads: use a noise level of "
+                              "a few mean edge lengths at most")
+    return out
 
 
 def estimate_noise(V: np.ndarray, F: np.ndarray, topo: Topology | None = None) -> float:
