@@ -254,7 +254,11 @@ def test_cli_batch_fill_and_option_checks(client, tmp_path, capsys):
     assert main(["batch", str(src), str(tmp_path / "o2"), "--task", "complete",
                  "--hole", "0"]) == 2
     assert main(["batch", str(src), str(src), "--task", "denoise"]) == 2
+    afile = tmp_path / "afile"
+    afile.write_text("x")
+    assert main(["batch", str(src), str(afile), "--task", "denoise"]) == 2
     err = capsys.readouterr().err
+    assert "exists and is not a folder" in err and afile.read_text() == "x"
     assert "--keep-border not an option of --task denoise" in err
     assert "needs exactly one of --region, --sphere, --box" in err
     assert "needs --template" in err and "is the input folder" in err
@@ -417,3 +421,15 @@ def test_records_survive_an_interrupted_write_and_resume_rules(tmp_path):
     assert not is_done(rec, **{**same, "version": "0.2.0"})
     inp.write_bytes(b"changed mesh")
     assert not is_done(rec, **same)
+
+
+def test_index_links_are_encoded_urls(tmp_path):
+    """Links of the batch page are URLs: '#', '%', spaces and ':' of file names are
+    percent-encoded ('part #2/scan#1.ply' linked to a fragment of 'part ')."""
+    from meshrepair.batch.report import _rel_link
+
+    out = tmp_path / "out"
+    assert _rel_link(str(out / "part #2" / "scan#1.ply"), out) == "part%20%232/scan%231.ply"
+    assert _rel_link(str(out / "100%.ply"), out) == "100%25.ply"
+    assert _rel_link(str(out / "a:b.ply"), out) == "a%3Ab.ply"  # not a URL scheme
+    assert _rel_link(None, out) is None

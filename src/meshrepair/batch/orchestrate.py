@@ -219,6 +219,9 @@ def run(paths, out_dir: str | os.PathLike, *, task: str, client=None, scheduler:
         raise MeshRepairError(f"unknown task {task!r}: choose one of {', '.join(TASKS)}")
     options = check_options(task, options)
     out = Path(out_dir)
+    if out.exists() and not out.is_dir():
+        raise MeshRepairError(f"the output folder {str(out)!r} exists and is not a folder: "
+                              "choose a folder name (it is made if missing)")
     if not isinstance(paths, (list, tuple)) and Path(paths).is_dir() and (
             Path(paths).resolve() == out.resolve()):
         raise MeshRepairError(f"the output folder {str(out)!r} is the input folder: choose "

@@ -13,6 +13,7 @@ from __future__ import annotations
 import datetime
 import html
 import os
+import urllib.parse
 from pathlib import Path
 
 from meshrepair.atomic import atomic_write
@@ -34,12 +35,15 @@ def _fmt(v: object) -> str:
 
 
 def _rel_link(path: str | None, out: Path) -> str | None:
+    """The URL of ``path`` from the page in ``out``: relative, with '#', '%', '?', ':' and
+    spaces of file names percent-encoded ('/' kept); a file URI on another drive."""
     if not path:
         return None
     try:
-        return Path(os.path.relpath(Path(path).resolve(), out.resolve())).as_posix()
+        rel = Path(os.path.relpath(Path(path).resolve(), out.resolve())).as_posix()
     except ValueError:  # another drive (Windows)
         return Path(path).resolve().as_uri()
+    return urllib.parse.quote(rel, safe="/")
 
 
 def _thumb(path: str | None, alt: str) -> str:
