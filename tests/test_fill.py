@@ -531,6 +531,10 @@ def test_fill_accepts_trimesh_and_selection_options():
     res = fill_holes(V, F, exclude=[0, 1])
     assert [h.status for h in res.holes] == ["skipped", "skipped", "filled"]
     assert res.holes[1].reason == "excluded"
+    # one index for a list of one, None for none (both raised TypeError after the whole fill)
+    res = fill_holes(V, F, holes=2, exclude=None)
+    assert [h.status for h in res.holes] == ["skipped", "skipped", "filled"]
+    assert res.params["holes"] == [2] and res.params["exclude"] == []
     res = fill_holes(V, F, keep_border=True, max_hole_size=20)  # holes: 56, 24, 14 edges
     assert [h.status for h in res.holes] == ["skipped", "skipped", "filled"]
     assert "max_hole_size (24 > 20)" in res.holes[1].reason
@@ -551,6 +555,7 @@ def test_fill_accepts_trimesh_and_selection_options():
     ({"inner_solver": "x"}, "inner_solver must be one of"),
     ({"callback": 3}, "callback must be callable"),
     ({"progress": "x"}, "progress must be callable"),
+    ({"exclude": "a"}, "exclude must be hole indices"),
 ])
 def test_fill_bad_options(kwargs, msg):
     V, F = _holed_grid()

@@ -78,6 +78,14 @@ def test_an_edited_plan_runs_as_edited(noisy_fandisk):
     r = mr.denoise(V, F, plan=q)
     assert r.params["lam"] == pytest.approx(4 * p.lam) and r.plan.lam == q.lam
     assert not np.array_equal(r.V, mr.denoise(V, F, plan=p).V)
+    # the edited plan and the plan that ran print the value that runs, as the user's edit
+    for text in (str(q), str(r.plan)):
+        line = next(s for s in text.splitlines() if s.strip().startswith("lam "))
+        assert f"{q.lam:.4g}" in line and "[user] edited" in line, line
+    # the records a plan carries are plans or None
+    for name in ("if_correlated", "if_structured", "inner"):
+        with pytest.raises(MeshRepairError, match=f"plan.{name} must be a DenoisePlan"):
+            mr.denoise(V, F, plan=dataclasses.replace(p, **{name: "x"}))
 
 
 def test_user_options_appear_as_set_by_the_user(heavy_spot):

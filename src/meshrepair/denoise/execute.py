@@ -20,7 +20,14 @@ from meshrepair.denoise.folds import (
     _volume_ratio,
     unfold_result,
 )
-from meshrepair.denoise.plan import Decision, DenoisePlan, _State, edited_fields, mesh_key
+from meshrepair.denoise.plan import (
+    Decision,
+    DenoisePlan,
+    _State,
+    as_record,
+    edited_fields,
+    mesh_key,
+)
 from meshrepair.denoise.result import DenoiseResult
 from meshrepair.denoise.rules import FLAT_A, lambda_from_noise, robust_a_from_noise
 from meshrepair.errors import MeshRepairError
@@ -78,8 +85,8 @@ def _execute(plan: DenoisePlan, V, F, callback=None, *, made_here: bool = False,
 
         r.V = _cl.apply(r.V, F, topo, gamma, info, impulsive, V, st.r1_V)
         r.params.update({k_: info[k_] for k_ in _cl.RECORDED})
-        r.plan = replace(plan, inner=r.plan, after_solve=_after(info, st.info, _cl.RECORDED),
-                         _state=None)
+        r.plan = as_record(plan, inner=r.plan,
+                           after_solve=_after(info, st.info, _cl.RECORDED))
         return r
     info["presmooth_steps"] = 0
     reorder, inv, Fw, topo_w = st.reorder, st.inv, st.Fw, st.topo_w
@@ -198,7 +205,7 @@ def _execute(plan: DenoisePlan, V, F, callback=None, *, made_here: bool = False,
         iterations=res.iterations, stop_reason=res.stop_reason, noise_estimate=gamma,
         params=params, n_unfolded=st.n_unf,
         # the record keeps no arrays of the reading: it would hold the probe's result alive
-        plan=replace(plan, after_solve=_after(info, st.info, ()), _state=None),
+        plan=as_record(plan, after_solve=_after(info, st.info, ())),
     )
 
 
@@ -213,6 +220,11 @@ def _check_edits(plan: DenoisePlan) -> None:
         raise MeshRepairError(f"plan.stages must be a non-empty tuple of Stage objects (edit the "
                               f"plan's own, e.g. plan.stages[:1]), got {plan.stages!r}")
     check_number("outside_weight", plan.outside_weight, low=0)
+    for name in ("inner", "if_correlated", "if_structured"):
+        sub = getattr(plan, name)
+        if sub is not None and not isinstance(sub, DenoisePlan):
+            raise MeshRepairError(f"plan.{name} must be a DenoisePlan or None (a record the plan "
+                                  f"carries: edit its fields instead), got {type(sub).__name__}")
 
 
 def _refuse_unused_edits(plan: DenoisePlan, planned: int) -> None:

@@ -22,7 +22,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping
-from dataclasses import dataclass, field, fields
+from dataclasses import dataclass, field, fields, replace
 from typing import Any
 
 import numpy as np
@@ -119,7 +119,7 @@ class DenoisePlan:
             out.append(f"{indent}  reading:")
             out += [f"{indent}    {k:<24} {_fmt(v)}" for k, v in self.reading.items()]
         out.append(f"{indent}  decisions:")
-        out += [f"{indent}    {d.line()}" for d in self.decisions]
+        out += [f"{indent}    {d.line()}" for d in decisions_with_edits(self)]
         out.append(f"{indent}  stages of the main solve:")
         for s in self.stages:
             out.append(f"{indent}    {s.name or 'stage'}: a={_fmt(s.a)} eps={_fmt(s.eps)} "
@@ -213,6 +213,21 @@ def edited_fields(plan: DenoisePlan) -> list[str]:
     if st is None or st.planned is None:
         return []
     return [k for k, v in st.planned.items() if getattr(plan, k) != v]
+
+
+def decisions_with_edits(plan: DenoisePlan) -> tuple[Decision, ...]:
+    """``plan.decisions`` with each field the user edited (:func:`edited_fields`) recorded as
+    what runs: its current value, set by the user."""
+    edited = set(edited_fields(plan))
+    return tuple(Decision(d.name, getattr(plan, d.name), "edited by the user "
+                          "(dataclasses.replace)", by_user=True) if d.name in edited else d
+                 for d in plan.decisions)
+
+
+def as_record(plan: DenoisePlan, **changes) -> DenoisePlan:
+    """The record of ``plan`` after its run (``DenoiseResult.plan``): the user's edits in its
+    decisions, no reading state (it would hold the probe's arrays alive), ``changes``."""
+    return replace(plan, decisions=decisions_with_edits(plan), _state=None, **changes)
 
 
 def mesh_key(V: np.ndarray, F: np.ndarray) -> str:

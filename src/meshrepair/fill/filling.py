@@ -5,6 +5,7 @@ from __future__ import annotations
 import logging
 from collections.abc import Callable, Sequence
 
+from meshrepair.errors import MeshRepairError
 from meshrepair.fill.core import _fill_core
 from meshrepair.fill.options import _check_options, _solve_options
 from meshrepair.fill.result import FillResult
@@ -144,6 +145,7 @@ def fill_holes(
     from meshrepair.options import check_bool
 
     check_bool("keep_border", keep_border)
+    holes, exclude = _index_list("holes", holes), _index_list("exclude", exclude) or []
     found = _find_holes(V, F)
     borders, enclosure, notes = classify_loops(V, F, found)
     skip = select_holes(found, max_hole_size=max_hole_size, keep_border=keep_border,
@@ -151,7 +153,7 @@ def fill_holes(
     # loops the rest of the surface encloses, and loops the caller asked for, are never refused
     known = {i for i, w in enclosure.items() if w >= ENCLOSED}
     if holes is not None:
-        known |= {int(i) for i in ([holes] if isinstance(holes, int) else holes)}
+        known |= {int(i) for i in holes}
     check_budget([h for h in found if h.index not in skip], edge_length, what="fill_holes")
     log.info("fill_holes: %d holes found, %d selected%s", len(found), len(found) - len(skip),
              f" ({len(borders)} open border(s) left open)" if borders else "")
@@ -171,5 +173,21 @@ def fill_holes(
         res = retry_split(V, F, found, skip, res, opts, known, uncertain, notes)
     res.params.update(enclosure={int(i): round(w, 4) for i, w in enclosure.items()})
     res.params.update(max_hole_size=max_hole_size, keep_border=keep_border,
-                      exclude=list(exclude), holes=None if holes is None else list(holes))
+                      exclude=exclude, holes=holes)
     return res
+
+
+def _index_list(name: str, value) -> list | None:
+    """Hole indices as a list (one index as a list of one; None stays None), checked for their
+    values by :func:`meshrepair.holes.select_holes`; MeshRepairError for what is not a
+    sequence."""
+    from meshrepair.options import is_whole
+
+    if value is None:
+        return None
+    if is_whole(value):
+        return [int(value)]
+    if isinstance(value, (str, bytes)) or not hasattr(value, "__iter__"):
+        raise MeshRepairError(f"{name} must be hole indices (a list of int) or None, got "
+                              f"{value!r}")
+    return list(value)
