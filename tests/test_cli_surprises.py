@@ -214,3 +214,24 @@ def test_metrics_json_stays_json_and_noise_refuses_unreadable_levels(tmp_path, c
     out = tmp_path / "n.ply"
     assert main(["noise", str(a), str(out), "--gamma", "1e300"]) == 2
     assert "beyond" in capsys.readouterr().err and not out.exists()
+
+
+@pytest.mark.parametrize("cmd", ["render", "view", "report"])
+@pytest.mark.parametrize("bad", ["-5", "nan", "500", "inf"])
+def test_sharp_threshold_is_an_angle(tmp_path, capsys, cmd, bad):
+    """--sharp-threshold is checked as --th is, before any work (-5 marked every edge sharp,
+    nan / 500 / inf none, all with exit 0)."""
+    out = {"render": "o.png", "view": "o.html", "report": "o.html"}[cmd]
+    argv = [cmd, str(data_path("spot.ply"))] + (["-o"] if cmd == "view" else []) + [
+        str(tmp_path / out), f"--sharp-threshold={bad}"]
+    with pytest.raises(SystemExit) as exc:
+        main(argv)
+    assert exc.value.code == 2 and "angle in degrees" in capsys.readouterr().err
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_quality_line_of_a_patch_without_inner_vertices():
+    from meshrepair.fill.quality import quality_line
+
+    q = {"seam_deg": 3.0, "surround_deg": 2.0, "curvature_ratio": float("nan")}
+    assert "n/a" in quality_line(q) and "nan" not in quality_line(q)

@@ -149,6 +149,20 @@ class ProgressBar:
             self.bar.close()
 
 
+def angle_degrees(text: str) -> float:
+    """argparse type of a dihedral threshold: a number of degrees in (0, 180)
+    (:func:`meshrepair.options.check_angle`)."""
+    import argparse
+
+    from meshrepair.options import check_angle
+
+    try:
+        return check_angle("the threshold", float(text))
+    except (ValueError, MeshRepairError):
+        raise argparse.ArgumentTypeError(f"must be an angle in degrees in (0, 180), got "
+                                         f"{text!r}") from None
+
+
 def add_report_option(p) -> None:
     """The ``--report OUT.html`` option shared by the repair commands."""
     p.add_argument("--report", metavar="OUT.html", default=None,

@@ -17,6 +17,7 @@ from pathlib import Path
 
 import numpy as np
 
+from meshrepair.commands.common import angle_degrees
 from meshrepair.errors import MeshRepairError
 
 _COLOR_HELP = (
@@ -146,7 +147,7 @@ def _add_view_options(p: argparse.ArgumentParser) -> None:
                    "default: the object's front, upright)")
     p.add_argument("--sharp-edges", action="store_true",
                    help="overlay the sharp-edge mask M_E (dihedral angle above --sharp-threshold)")
-    p.add_argument("--sharp-threshold", type=float, default=30.0, metavar="DEG",
+    p.add_argument("--sharp-threshold", type=angle_degrees, default=30.0, metavar="DEG",
                    help="dihedral angle threshold for --sharp-edges (default 30)")
     p.add_argument("--supersample", type=int, default=1, choices=(1, 2, 3),
                    help="anti-aliasing factor (default 1)")

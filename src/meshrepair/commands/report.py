@@ -14,6 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
+from meshrepair.commands.common import angle_degrees
 from meshrepair.commands.render import check_output_path, load_mesh, reference_metrics, sharp_edges
 from meshrepair.errors import MeshRepairError
 
@@ -157,7 +158,7 @@ def register(subparsers) -> None:
                    help="JSON run log: a list of iteration records, or an object with keys "
                    "history, parameters, timings, metrics")
     p.add_argument("--title", default=None, help="page title")
-    p.add_argument("--sharp-threshold", type=float, default=30.0, metavar="DEG",
+    p.add_argument("--sharp-threshold", type=angle_degrees, default=30.0, metavar="DEG",
                    help="dihedral angle for the sharp-edge mask M_E (default 30)")
     p.add_argument("--image-size", type=int, default=480, metavar="PX",
                    help="size of each rendered panel (default 480)")

@@ -11,6 +11,7 @@ import argparse
 import time
 from pathlib import Path
 
+from meshrepair.commands.common import angle_degrees
 from meshrepair.errors import MeshRepairError
 
 _SUFFIXES = (".html", ".htm")
@@ -92,7 +93,7 @@ def register(subparsers) -> None:
     p.add_argument("--title", default=None, help="page title")
     p.add_argument("--reference", default=None, metavar="REF",
                    help="ground truth: MSAE and E_V of meshes with its vertex count")
-    p.add_argument("--sharp-threshold", type=float, default=30.0, metavar="DEG",
+    p.add_argument("--sharp-threshold", type=angle_degrees, default=30.0, metavar="DEG",
                    help="dihedral angle of the sharp-edge overlay M_E (default 30)")
     p.add_argument("--face-budget", type=int, default=None, metavar="N",
                    help="show a decimated copy of meshes with more than N faces (default "

@@ -79,6 +79,7 @@ def quality_line(q: dict) -> str:
     """One line for the CLI summary."""
     if not q:
         return ""
+    ratio = q["curvature_ratio"]  # none for a patch without inner vertices (one triangle)
     line = (f"seam {q['seam_deg']:.1f}° (surround {q['surround_deg']:.1f}°), curvature "
-            f"{q['curvature_ratio']:.2f}× the surround's")
+            + (f"{ratio:.2f}× the surround's" if ratio == ratio else "n/a (no inner vertex)"))
     return line + (f"; CHECK: {q['why']}" if q.get("check") else "")
