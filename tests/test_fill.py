@@ -556,6 +556,8 @@ def test_fill_accepts_trimesh_and_selection_options():
     ({"callback": 3}, "callback must be callable"),
     ({"progress": "x"}, "progress must be callable"),
     ({"exclude": "a"}, "exclude must be hole indices"),
+    ({"holes": [0, 1], "exclude": [1]}, "hole 1 is both selected"),
+    ({"fitted": True, "initial": "harmonic"}, "needs initial='bilaplacian'"),
 ])
 def test_fill_bad_options(kwargs, msg):
     V, F = _holed_grid()
@@ -628,6 +630,9 @@ def test_cli_fill_and_inpaint(tmp_path, capsys):
     assert "hole index 9 does not exist" in capsys.readouterr().out
     assert _cli(["fill", str(src), "--list"]) == 0
     assert "3 holes" in capsys.readouterr().out
+    # --list writes nothing: an output, a report or a log with it is a contradiction
+    assert _cli(["fill", str(src), str(tmp_path / "x.ply"), "--list"]) == 2
+    assert "--list only lists the holes and writes nothing: drop OUT" in capsys.readouterr().out
     # inpaint with a sphere, a box and a region file
     out2 = tmp_path / "inp.ply"
     assert _cli(["inpaint", str(src), str(out2), "--sphere", "7,7,1.0,1.6"]) == 0

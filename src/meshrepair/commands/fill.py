@@ -90,6 +90,12 @@ def run_fill(args: argparse.Namespace) -> int:
 
     if args.output is None and not args.list:
         raise MeshRepairError("missing output file: give IN OUT (or --list to only list holes)")
+    if args.list:
+        given = [n for n, v in (("OUT", args.output), ("--report", args.report),
+                                ("--log", args.log)) if v is not None]
+        if given:
+            raise MeshRepairError(f"--list only lists the holes and writes nothing: drop "
+                                  f"{', '.join(given)}")
     paths = (None, None, None) if args.list else run_outputs(args, [args.input],
                                                               output=args.output)
     m = read_mesh(args.input)

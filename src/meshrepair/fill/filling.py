@@ -146,6 +146,10 @@ def fill_holes(
 
     check_bool("keep_border", keep_border)
     holes, exclude = _index_list("holes", holes), _index_list("exclude", exclude) or []
+    both = sorted(set(holes or ()) & set(exclude))
+    if both:
+        raise MeshRepairError(f"hole {both[0]} is both selected (holes=, --holes) and excluded "
+                              "(exclude=, --exclude): name it in one of them")
     found = _find_holes(V, F)
     borders, enclosure, notes = classify_loops(V, F, found)
     skip = select_holes(found, max_hole_size=max_hole_size, keep_border=keep_border,

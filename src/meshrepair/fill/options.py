@@ -38,6 +38,9 @@ def _check_options(opts: dict) -> dict:
     initial = opts["initial"]
     if initial not in INITIAL_MODES:
         raise MeshRepairError(f"initial must be one of {INITIAL_MODES}, got {initial!r}")
+    if opts["fitted"] and initial != "bilaplacian":  # the fitted fairing refines that patch
+        raise MeshRepairError(f"fitted=True (--fitted) needs initial='bilaplacian', got "
+                              f"initial={initial!r}: drop one of them")
     check_fill_options(**{k: opts[k] for k in ("edge_length", "lam", "th", "a", "max_iter", "tol",
                                                 "rings", "relax", "inner_iters")})
     return {**opts, "max_iter": int(opts["max_iter"]), "rings": int(opts["rings"])}
