@@ -110,20 +110,27 @@ def test_repair_commands_write_html_report(tmp_path):
     assert "noise estimate" in rep2.read_text()
 
 
-@pytest.mark.parametrize("save", [False, True])
-def test_ctrl_c_stops_cleanly(tmp_path, monkeypatch, save):
+def _ctrl_c_at_iteration(monkeypatch, k: int = 3) -> dict:
+    """Make the CLI's progress bar raise KeyboardInterrupt at the ``k``-th solver iteration (as
+    Ctrl-C does there); returns the call counter."""
     from meshrepair.commands import common
 
     calls = {"n": 0}
     orig = common.ProgressBar.__call__
 
-    def interrupt_at_3(self, entry):
+    def interrupt(self, entry):
         calls["n"] += 1
-        if calls["n"] == 3:
+        if calls["n"] == k:
             raise KeyboardInterrupt
         orig(self, entry)
 
-    monkeypatch.setattr(common.ProgressBar, "__call__", interrupt_at_3)
+    monkeypatch.setattr(common.ProgressBar, "__call__", interrupt)
+    return calls
+
+
+@pytest.mark.parametrize("save", [False, True])
+def test_ctrl_c_stops_cleanly(tmp_path, monkeypatch, save):
+    _ctrl_c_at_iteration(monkeypatch)
     out = tmp_path / "o.ply"
     args = ["denoise", str(SPOT), str(out), "-q"]
     rc = main(args + (["--save-on-interrupt"] if save else []))
@@ -139,22 +146,12 @@ def test_ctrl_c_during_fill_writes_nothing(tmp_path, monkeypatch, save):
     """fill (and inpaint, the same path) as denoise: Ctrl-C during the solve writes nothing and
     exits 130 (it wrote the partial iterate and exited 0), unless --save-on-interrupt."""
     import meshrepair as mr
-    from meshrepair.commands import common
 
     V, F = bundled_mesh("spot.ply")
     cut = np.linalg.norm(V[F].mean(axis=1) - V[1500], axis=1) < 0.12
     holed, out = tmp_path / "holed.ply", tmp_path / "filled.ply"
     mr.write_mesh(holed, V, F[~cut])
-    calls = {"n": 0}
-    orig = common.ProgressBar.__call__
-
-    def interrupt_at_3(self, entry):
-        calls["n"] += 1
-        if calls["n"] == 3:
-            raise KeyboardInterrupt
-        orig(self, entry)
-
-    monkeypatch.setattr(common.ProgressBar, "__call__", interrupt_at_3)
+    calls = _ctrl_c_at_iteration(monkeypatch)
     rc = main(["fill", str(holed), str(out), "-q"] + (["--save-on-interrupt"] if save else []))
     assert calls["n"] >= 3  # the solve was interrupted
     if save:
