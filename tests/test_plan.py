@@ -86,6 +86,10 @@ def test_an_edited_plan_runs_as_edited(noisy_fandisk):
     for name in ("if_correlated", "if_structured", "inner"):
         with pytest.raises(MeshRepairError, match=f"plan.{name} must be a DenoisePlan"):
             mr.denoise(V, F, plan=dataclasses.replace(p, **{name: "x"}))
+    # the record fields are read, not edited (options={...} raised a KeyError at run time)
+    for name, value in (("options", {"lam": -5}), ("reading", {}), ("decisions", ())):
+        with pytest.raises(MeshRepairError, match=f"plan.{name} records how"):
+            mr.denoise(V, F, plan=dataclasses.replace(p, **{name: value}))
 
 
 def test_user_options_appear_as_set_by_the_user(heavy_spot):

@@ -21,7 +21,14 @@ from meshrepair.denoise import structure as _structure
 from meshrepair.denoise.checks import _checked
 from meshrepair.denoise.corrwhite import BandRead, band_read
 from meshrepair.denoise.folds import fidelity_data, unfolded_data_after_probe, unfolded_input
-from meshrepair.denoise.plan import Decision, DenoisePlan, _State, mesh_key, planned_values
+from meshrepair.denoise.plan import (
+    RECORD_FIELDS,
+    Decision,
+    DenoisePlan,
+    _State,
+    mesh_key,
+    planned_values,
+)
 from meshrepair.denoise.regions import flat_edges
 from meshrepair.denoise.rules import (
     CAD_SUPPORT,
@@ -84,11 +91,11 @@ def _plan(V, F, *, digest: bool = True, probe_result=None, checked=None,
     band = _band(V, F, p, memo) if auto and p.willmore_weight <= 1.0 else None
     if not auto or (p.willmore_weight <= 1.0 and band is None):
         if not _structure.applies(p, options):
-            return p
+            return _sealed(p)
         po = _plan_one(V, F, digest=digest, **options, organic=True, probe_result=first,
                        memo=memo)
         po._state.first_probe = None
-        return replace(p, if_structured=po)
+        return _sealed(replace(p, if_structured=po))
     if band is not None:  # the profile reads white noise, the band read correlated noise
         pw, p = p, _plan_one(V, F, digest=digest, **options, probe_result=first, memo=memo,
                              band=band)
@@ -104,7 +111,7 @@ def _plan(V, F, *, digest: bool = True, probe_result=None, checked=None,
                    f"plan below only if the residual fails the white-noise test (one-ring "
                    f"correlation ρ₁ > {RHO1_MAX:g} or level > {LEVEL_MAX:g} γ̂; whiteness.py)",
                    {"rho": p.reading["noise_rho"], "willmore_weight": p.willmore_weight})
-    return replace(pw, decisions=pw.decisions + (dec,), if_correlated=p)
+    return _sealed(replace(pw, decisions=pw.decisions + (dec,), if_correlated=p))
 
 
 def _plan_one(V, F, *, lam, th, a, robust_iters, feature_iters, mask_update_every,
@@ -352,6 +359,13 @@ def _plan_one(V, F, *, lam, th, a, robust_iters, feature_iters, mask_update_ever
         stages=tuple(stages), start_from_probe=bool(warm), presmooth_steps=int(kp),
         polish=options["polish"], decisions=tuple(dec), inner=inner_plan, _state=st)
     st.planned = planned_values(plan)  # what the executor compares a user's edits against
+    return _sealed(plan)
+
+
+def _sealed(plan: DenoisePlan) -> DenoisePlan:
+    """``plan`` with its record fields (:data:`~meshrepair.denoise.plan.RECORD_FIELDS`) noted in
+    its state as made, so that an edit of them is refused (the executor's ``_check_edits``)."""
+    plan._state.record = {k: getattr(plan, k) for k in RECORD_FIELDS}
     return plan
 
 

@@ -220,6 +220,13 @@ def _check_edits(plan: DenoisePlan) -> None:
         raise MeshRepairError(f"plan.stages must be a non-empty tuple of Stage objects (edit the "
                               f"plan's own, e.g. plan.stages[:1]), got {plan.stages!r}")
     check_number("outside_weight", plan.outside_weight, low=0)
+    record = getattr(plan._state, "record", None)
+    if record is not None:
+        changed = [k for k, v in record.items() if getattr(plan, k) is not v]
+        if changed:
+            raise MeshRepairError(f"plan.{changed[0]} records how the plan was made and is not "
+                                  f"edited: change the fields of plan.editable() instead, or "
+                                  f"make a new plan with mr.plan_denoise(V, F, ...)")
     for name in ("inner", "if_correlated", "if_structured"):
         sub = getattr(plan, name)
         if sub is not None and not isinstance(sub, DenoisePlan):

@@ -196,7 +196,13 @@ class _State:
     first_probe: Any = None
     lowpassed_from: Any = None  # (raw input y, pairs k_p) of a coarse-to-fine run's input
     planned: dict | None = None  # the editable fields as the reading decided them
+    record: dict | None = None  # the record fields (RECORD_FIELDS) as the reading made them
     band: Any = None  # the two-octave band read (corrwhite.BandRead), where the plan made it
+
+
+RECORD_FIELDS = ("options", "reading", "decisions")
+"""Fields of a plan that record how it was made: they are read, not edited (an edit would not
+change what runs)."""
 
 
 def planned_values(plan: DenoisePlan) -> dict:
