@@ -51,49 +51,24 @@ def check_budget(holes: Iterable[Hole], h: float | None, *, what: str = "fill_ho
     return total
 
 
-def _finite(name: str, val, *, lo: float | None = None, lo_open: bool = False,
-            hi: float | None = None, hi_open: bool = False, allow_none: bool = False) -> None:
-    if val is None and allow_none:
-        return
-    try:
-        x = float(val)
-    except (TypeError, ValueError):
-        raise MeshRepairError(f"{name} must be a number, got {val!r}") from None
-    ok = np.isfinite(x) and not isinstance(val, bool)
-    if ok and lo is not None:
-        ok = x > lo if lo_open else x >= lo
-    if ok and hi is not None:
-        ok = x < hi if hi_open else x <= hi
-    if not ok:
-        rng = []
-        if lo is not None:
-            rng.append(f"{'>' if lo_open else '>='} {lo:g}")
-        if hi is not None:
-            rng.append(f"{'<' if hi_open else '<='} {hi:g}")
-        raise MeshRepairError(f"{name} must be a finite number{' ' if rng else ''}"
-                              f"{' and '.join(rng)}, got {val!r}")
-
-
-def _integer(name: str, val, lo: int, hi: int | None = None) -> None:
-    if isinstance(val, (bool, np.bool_)) or not isinstance(val, (int, np.integer, float)) \
-            or not np.isfinite(val) or int(val) != val or val < lo \
-            or (hi is not None and val > hi):
-        rule = f">= {lo}" if hi is None else f"in [{lo}, {hi}]"
-        raise MeshRepairError(f"{name} must be an integer {rule}, got {val!r}")
-
-
 def check_fill_options(*, edge_length, lam, th, a, max_iter, tol, rings, relax,
                        inner_iters) -> None:
     """Validate the numeric options of fill_holes / inpaint (finite, in range), naming the
-    option in the message."""
-    _finite("edge_length", edge_length, lo=0.0, lo_open=True, allow_none=True)
-    _finite("lam", lam, lo=0.0, lo_open=True, allow_none=True)
-    _finite("th", th, lo=0.0, lo_open=True, hi=180.0, hi_open=True)
-    _finite("a", a, lo=0.0, lo_open=True)
-    _finite("tol", tol, lo=0.0)
-    _finite("relax", relax, lo=0.0)
-    from meshrepair.options import MAX_INNER_ITERATIONS, MAX_ITERATIONS
+    option in the message (the package's option checks, :mod:`meshrepair.options`)."""
+    from meshrepair.options import (
+        MAX_INNER_ITERATIONS,
+        MAX_ITERATIONS,
+        check_angle,
+        check_int,
+        check_number,
+    )
 
-    _integer("max_iter", max_iter, 0, MAX_ITERATIONS)
-    _integer("rings", rings, 1)
-    _integer("inner_iters", inner_iters, 1, MAX_INNER_ITERATIONS)
+    check_number("edge_length", edge_length, low=0, low_open=True, allow_none=True)
+    check_number("lam", lam, low=0, low_open=True, allow_none=True)
+    check_angle("th", th)
+    check_number("a", a, low=0, low_open=True)
+    check_number("tol", tol, low=0)
+    check_number("relax", relax, low=0)
+    check_int("max_iter", max_iter, low=0, high=MAX_ITERATIONS)
+    check_int("rings", rings, low=1)
+    check_int("inner_iters", inner_iters, low=1, high=MAX_INNER_ITERATIONS)
