@@ -12,8 +12,8 @@ from meshrepair.denoise import heavylength as hl
 from meshrepair.denoise import presmooth as ps
 from meshrepair.denoise.coarse import curvature_roughness
 from meshrepair.mesh.geometry import vertex_normals
-from meshrepair.mesh.probe import probe_field, used_vertices
-from meshrepair.mesh.topology import edge_topology
+from meshrepair.mesh.probe import probe_field
+from meshrepair.mesh.topology import edge_topology, used_vertices
 
 from .conftest import shared_mesh
 

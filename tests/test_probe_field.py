@@ -11,8 +11,8 @@ from meshrepair import add_noise
 from meshrepair.denoise.corrwhite import band_read
 from meshrepair.denoise.risk import normal_level, risk_curve
 from meshrepair.denoise.scale import correlated_noise, noise_scale
-from meshrepair.mesh.probe import canonical_order, probe_field, used_vertices
-from meshrepair.mesh.topology import edge_topology
+from meshrepair.mesh.probe import canonical_order, probe_field
+from meshrepair.mesh.topology import edge_topology, used_vertices
 
 
 def _mesh():
@@ -89,3 +89,18 @@ def test_a_vertex_no_face_uses_changes_no_draw_and_no_reading():
     a, b = noise_scale(Vn, F), noise_scale(Vnx, F)
     assert np.array_equal(a.profile, b.profile) and a.steps == b.steps
 
+
+
+def test_compact_keeps_the_used_vertices_in_order():
+    """mesh.topology.compact: the used vertices in increasing order, the faces renumbered onto
+    them (the same triangles), the unused ones gone."""
+    from meshrepair.mesh.topology import compact
+
+    V, F = _mesh()
+    Vx = np.vstack([V[:5], [[9.0, 9.0, 9.0]], V[5:], [[-9.0, 0.0, 1.0]]])
+    Fx = np.where(F >= 5, F + 1, F)
+    idx, Vc, Fc = compact(Vx, Fx)
+    assert np.array_equal(idx, np.r_[0:5, 6:len(Vx) - 1])
+    assert np.array_equal(Vc, V) and np.array_equal(Fc, F) and np.array_equal(Vc[Fc], Vx[Fx])
+    Vc[0] = 0.0
+    assert not np.array_equal(Vx[0], Vc[0])  # a copy: the input is not touched

@@ -92,10 +92,10 @@ def extract_patch(V, F, faces) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _compact(V: np.ndarray, F: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    used = np.zeros(len(V), bool)
-    used[F.ravel()] = True
-    new = np.cumsum(used) - 1
-    return V[used].copy(), new[F].astype(np.int64)
+    from meshrepair.mesh.topology import compact
+
+    _, Vc, Fc = compact(V, F)
+    return Vc, Fc
 
 
 def load_transform(path_or_array) -> np.ndarray:

@@ -232,16 +232,12 @@ def _in_use(V: np.ndarray, F: np.ndarray):
     None when every vertex is used or ``F`` has an index out of range (the validation refuses
     it). The denoiser reads and solves on the used vertices only: a vertex no face uses is in
     no energy term, and must not move a reading (a median, a centroid) of the others."""
+    from meshrepair.mesh.topology import compact
+
     if F.size == 0 or F.min() < 0 or F.max() >= len(V):
         return None
-    used = np.zeros(len(V), bool)
-    used[F.ravel()] = True
-    if used.all():
-        return None
-    idx = np.flatnonzero(used)
-    new = np.full(len(V), -1, np.int64)
-    new[idx] = np.arange(len(idx))
-    return idx, V[idx], new[F]
+    sub = compact(V, F)
+    return None if len(sub[0]) == len(V) else sub
 
 
 def _checked_in_use(V: np.ndarray, F: np.ndarray):

@@ -90,7 +90,8 @@ def relief_read(X: np.ndarray, F: np.ndarray, edges: np.ndarray, gamma: float,
     """
     from meshrepair.denoise.lowpass import taubin_region, umbrella
     from meshrepair.mesh.geometry import vertex_normals
-    from meshrepair.mesh.probe import probe_field, used_vertices
+    from meshrepair.mesh.probe import probe_field
+    from meshrepair.mesh.topology import used_vertices
 
     W = umbrella(edges, len(X))
     n = vertex_normals(X, F)

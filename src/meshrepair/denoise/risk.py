@@ -56,7 +56,8 @@ def _probe(V: np.ndarray, edges: np.ndarray) -> np.ndarray:
     """The fixed Rademacher field ``Z`` (nV, 3), drawn in the canonical order of the vertices
     on ``edges`` (:mod:`meshrepair.mesh.probe`: a relabelled mesh gets the same ``Z`` on each
     vertex)."""
-    from meshrepair.mesh.probe import probe_field, used_vertices
+    from meshrepair.mesh.probe import probe_field
+    from meshrepair.mesh.topology import used_vertices
 
     return probe_field(V, 3, seed=PROBE_SEED, kind="rademacher",
                        used=used_vertices(edges, len(V)))

@@ -35,8 +35,8 @@ import scipy.sparse as sp
 from meshrepair._kernels import edge_lengths_exact
 from meshrepair._kernels.select import median_inplace
 from meshrepair.mesh.geometry import vertex_normals
-from meshrepair.mesh.probe import canonical_order, probe_field, used_vertices
-from meshrepair.mesh.topology import Topology, edge_topology, umbrella_operator
+from meshrepair.mesh.probe import canonical_order, probe_field
+from meshrepair.mesh.topology import Topology, edge_topology, umbrella_operator, used_vertices
 
 SCALES = (1, 2, 4)
 CANDIDATE_STEPS = (0, 1, 2, 3, 4, 6, 8, 12, 16)

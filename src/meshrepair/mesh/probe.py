@@ -23,12 +23,6 @@ import numpy as np
 PROBE_SEED = 0
 
 
-def used_vertices(edges: np.ndarray, n_vertices: int) -> np.ndarray:
-    """(n_vertices,) bool, the vertices on at least one of ``edges`` ((nE, 2) int)."""
-    used = np.zeros(int(n_vertices), bool)
-    used[np.asarray(edges).ravel()] = True
-    return used
-
 
 def canonical_order(V: np.ndarray, used: np.ndarray | None = None) -> np.ndarray:
     """The vertices sorted by squared distance to the centroid of the ``used`` ones (ties by

@@ -253,3 +253,33 @@ def boundary_loops(F: np.ndarray, n_vertices: int | None = None) -> list[np.ndar
         loops.append(np.asarray(loop, dtype=np.int64))
     loops.sort(key=len, reverse=True)
     return loops
+
+
+def used_vertices(index_rows: np.ndarray, n_vertices: int) -> np.ndarray:
+    """(n_vertices,) bool, the vertices named in ``index_rows`` (faces (nF, 3) or edges (nE, 2)):
+    those some face uses."""
+    used = np.zeros(int(n_vertices), bool)
+    used[np.asarray(index_rows).ravel()] = True
+    return used
+
+
+def compact(V: np.ndarray, F: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The mesh on the vertices its faces use: ``(idx, V[idx], F renumbered)``, ``idx`` the
+    used vertices in increasing order (so the renumbering keeps every order: edges sorted by
+    vertex stay sorted).
+
+    Parameters
+    ----------
+    V : (nV, 3) float
+    F : (nF, 3) int, indices in ``[0, nV)``
+
+    Returns
+    -------
+    idx : (k,) int64
+    V_used : (k, 3), a copy
+    F_used : (nF, 3) int64
+    """
+    idx = np.flatnonzero(used_vertices(F, len(V)))
+    new = np.full(len(V), -1, np.int64)
+    new[idx] = np.arange(len(idx))
+    return idx, V[idx], new[np.asarray(F)]
