@@ -10,13 +10,7 @@ import numpy as np
 import pytest
 
 from meshrepair.errors import MeshRepairError
-from meshrepair.holes._geom2d import (
-    MIN_ANGLE,
-    STEINER_MIN,
-    _area_switch,
-    steiner_cap,
-    triangulate_capped,
-)
+from meshrepair.holes._triangle import MIN_ANGLE, STEINER_MIN, steiner_cap, triangulate_capped
 
 SPIKED_INPAINT = textwrap.dedent("""
     import time
@@ -77,7 +71,7 @@ def test_sliver_polygon_is_refused_after_bounded_work():
     t = time.perf_counter()
     with pytest.raises(MeshRepairError, match="long thin polygon"):
         triangulate_capped({"vertices": Q, "segments": segs},
-                           f"pYQq{MIN_ANGLE:g}" + _area_switch(amax), cap)
+                           f"pYQq{MIN_ANGLE:g}", cap, max_area=amax)
     assert time.perf_counter() - t < 20.0
 
 
@@ -91,7 +85,7 @@ def test_cap_leaves_room_for_a_regular_polygon():
     amax = np.pi / 2000
     cap = steiner_cap(Q, k, amax)
     out = triangulate_capped({"vertices": Q, "segments": segs},
-                             f"pYQq{MIN_ANGLE:g}" + _area_switch(amax), cap)
+                             f"pYQq{MIN_ANGLE:g}", cap, max_area=amax)
     added = len(out["vertices"]) - k
     assert 500 < added < cap / 10
     assert cap >= STEINER_MIN

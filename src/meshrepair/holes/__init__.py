@@ -55,7 +55,8 @@ to check patches.
 from __future__ import annotations
 
 from meshrepair._kernels import HAVE_NUMBA
-from meshrepair.holes._geom2d import MIN_ANGLE, Patch
+from meshrepair.holes._geom2d import Patch
+from meshrepair.holes._triangle import MIN_ANGLE
 from meshrepair.holes.detect import Hole, HoleReport, _find_holes, find_holes, select_holes
 from meshrepair.holes.enclose import _opposite_points, enclose_holes
 from meshrepair.holes.fairing import fair_vertices

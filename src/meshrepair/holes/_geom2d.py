@@ -9,9 +9,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from meshrepair.errors import MeshRepairError
-
-MIN_ANGLE = 28.0
-"""Minimum angle (degrees) asked of the 2-D constrained Delaunay triangulation."""
+from meshrepair.holes._triangle import MIN_ANGLE, steiner_cap, triangulate_capped
 
 
 def _polygon_is_simple(Q: np.ndarray) -> bool:
@@ -105,61 +103,6 @@ def _harmonic(W: sp.csr_matrix, known: np.ndarray, values: np.ndarray) -> np.nda
     return out
 
 
-def _area_switch(max_area: float) -> str:
-    """Triangle's ``a`` switch for a maximum triangle area, in positional notation: Triangle
-    reads only digits and '.', so ``a6.3e-05`` would mean an area bound of 6.3 (and then the
-    switches ``e`` and ``-``), leaving loops of small meshes unrefined."""
-    return "a" + np.format_float_positional(float(max_area), precision=12, fractional=False,
-                                            trim="-")
-
-
-STEINER_FACTOR = 20
-"""Triangle may add at most this many times the vertices a patch needs at its area bound (the
-polygon's area over the bound, halved, plus one per loop vertex), and at least
-:data:`STEINER_MIN`. Measured patches of real holes add at most 2.25 times that count; a
-polygon that needs far more is a long thin one (a loop through a vertex far from the others):
-quality triangles along a sliver of width w and length L need about (L / w)² of them."""
-STEINER_MIN = 10_000
-"""Steiner points Triangle may always add (about 20 ms of its work)."""
-STEINER_MAX = 1_000_000
-"""Steiner points Triangle never exceeds (about the 2 M new-face budget of hole filling)."""
-
-
-def steiner_cap(Q: np.ndarray, n_loop: int, max_area: float | None) -> int:
-    """The most Steiner points a quality triangulation of the 2-D points ``Q`` (``n_loop`` of
-    them on the boundary) with triangle areas at most ``max_area`` may add
-    (:data:`STEINER_FACTOR`; the area is that of ``Q``'s convex hull, a bound of the region's)."""
-    from scipy.spatial import ConvexHull, QhullError
-
-    try:
-        area = float(ConvexHull(np.asarray(Q, dtype=np.float64)).volume)
-    except (QhullError, ValueError):  # collinear or too few points: no area
-        area = 0.0
-    n_tri = area / max_area if max_area else 0.0
-    n_tri = n_tri if np.isfinite(n_tri) else float(STEINER_MAX)
-    return int(min(STEINER_MAX, STEINER_FACTOR * (n_tri / 2.0 + n_loop) + STEINER_MIN))
-
-
-def triangulate_capped(data: dict, opts: str, cap: int) -> dict:
-    """``triangle.triangulate(data, opts)`` with at most ``cap`` Steiner points (switch ``S``);
-    :class:`MeshRepairError` when the cap is reached (the quality mesh of this polygon would
-    need more: refused after bounded work, instead of running for hours)."""
-    import triangle
-
-    n_in = len(data["vertices"])
-    out = triangle.triangulate(data, f"{opts}S{max(int(cap), 0)}")
-    if len(out["vertices"]) - n_in >= cap:
-        X = np.asarray(data["vertices"], dtype=np.float64)
-        seg = np.asarray(data["segments"], dtype=np.int64).reshape(-1, 2)
-        el = np.linalg.norm(X[seg[:, 0]] - X[seg[:, 1]], axis=1)
-        raise MeshRepairError(
-            f"the patch of this hole would need more than {cap:,} new vertices for triangles "
-            f"with angles of at least {MIN_ANGLE:g}°: in its planar view the constrained edges "
-            f"range from {el.min():.3g} to {el.max():.3g} in length, a long thin polygon; check "
-            "the mesh for vertices far from the others (outliers), or exclude this hole")
-    return out
-
-
 def _triangulate(Q: np.ndarray, segments: np.ndarray, max_area: float | None,
                  holes: np.ndarray | None = None, quality: bool = True) -> tuple[np.ndarray,
                                                                                   np.ndarray]:
@@ -169,9 +112,7 @@ def _triangulate(Q: np.ndarray, segments: np.ndarray, max_area: float | None,
     opts = "pYQ"
     if quality:
         opts += f"q{MIN_ANGLE:g}"
-    if max_area is not None:
-        opts += _area_switch(max_area)
-    out = triangulate_capped(data, opts, steiner_cap(Q, len(Q), max_area))
+    out = triangulate_capped(data, opts, steiner_cap(Q, len(Q), max_area), max_area=max_area)
     X = np.asarray(out["vertices"], dtype=np.float64)
     T = np.asarray(out.get("triangles", np.empty((0, 3))), dtype=np.int64).reshape(-1, 3)
     return X, T

@@ -10,16 +10,8 @@ import numpy as np
 import scipy.sparse as sp
 
 from meshrepair.errors import MeshRepairError
-from meshrepair.holes._geom2d import (
-    MIN_ANGLE,
-    Patch,
-    _area_switch,
-    _max_area_for,
-    _orient_patch,
-    _polygon_is_simple,
-    steiner_cap,
-    triangulate_capped,
-)
+from meshrepair.holes._geom2d import Patch, _max_area_for, _orient_patch, _polygon_is_simple
+from meshrepair.holes._triangle import MIN_ANGLE, steiner_cap, triangulate, triangulate_capped
 from meshrepair.holes.liepa import min_weight_triangulation
 
 log = logging.getLogger(__name__)
@@ -248,8 +240,6 @@ def _refine_on_triangulation(k: int, S: np.ndarray, Ts: np.ndarray, Qs: np.ndarr
     -------
     (X (m, 3), T (t, 3), X2 (m, 2)), or None if Triangle changed the loop vertices.
     """
-    import triangle
-
     Q = Qs[:k]
     segs = np.c_[np.arange(k), (np.arange(k) + 1) % k]
     pts, no_split = Q, ""
@@ -288,15 +278,14 @@ def _refine_on_triangulation(k: int, S: np.ndarray, Ts: np.ndarray, Qs: np.ndarr
         # away: a 105-loop gave 1.2 M triangles); reaching the bound gives the layout up (None),
         # and the caller falls back to the mean-value layout
         cap = int(STEINER_FACTOR * float(areas(Qs, Ts).sum()) / amax) + 4 * k + 100
-        out = triangle.triangulate({"vertices": pts, "segments": segs},
-                                   opts + no_split + f"S{cap}" + _area_switch(amax))
+        out = triangulate({"vertices": pts, "segments": segs}, opts + no_split + f"S{cap}",
+                          max_area=amax)
     else:
         # mean-value layout: the last resort, capped too (a loop through a far-away vertex is a
         # sliver whose quality mesh is unbounded): past the cap, MeshRepairError; the two
         # refinement rounds share the cap of the first call
         cap = steiner_cap(Q, k, amax)
-        out = triangulate_capped({"vertices": Q, "segments": segs}, opts + _area_switch(amax),
-                                 cap)
+        out = triangulate_capped({"vertices": Q, "segments": segs}, opts, cap, max_area=amax)
     for _ in range(0 if isometric else 2):
         X2 = np.asarray(out["vertices"], dtype=np.float64)
         T = np.asarray(out["triangles"], dtype=np.int64)

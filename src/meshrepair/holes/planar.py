@@ -227,11 +227,11 @@ def _enclose_with_creases(P, Q, segs, h2, route, c, e1, e2, method, Qc=None,
     markers = np.r_[np.ones(k, np.int32), 2 + np.arange(len(cs), dtype=np.int32)]
     data = {"vertices": Qall, "segments": np.r_[segs, cs],
             "segment_markers": markers[:, None]}
-    from meshrepair.holes._geom2d import MIN_ANGLE, _area_switch, steiner_cap, triangulate_capped
+    from meshrepair.holes._triangle import MIN_ANGLE, steiner_cap, triangulate_capped
 
     amax = _max_area_for(h2)
-    out = triangulate_capped(data, f"pYQq{MIN_ANGLE:g}" + _area_switch(amax),
-                             steiner_cap(Qall, len(Qall), amax))
+    out = triangulate_capped(data, f"pYQq{MIN_ANGLE:g}", steiner_cap(Qall, len(Qall), amax),
+                             max_area=amax)
     X2 = np.asarray(out["vertices"], dtype=np.float64)
     T = np.asarray(out.get("triangles", np.empty((0, 3))), dtype=np.int64).reshape(-1, 3)
     if len(T) == 0 or len(X2) < len(Qall) or not np.allclose(X2[: len(Qall)], Qall):
