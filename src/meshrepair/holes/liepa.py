@@ -12,6 +12,7 @@ from meshrepair._kernels import HAVE_NUMBA
 from meshrepair.errors import MeshRepairError
 from meshrepair.holes._geom2d import _loop_positions
 from meshrepair.holes.liepa_delaunay import _py_delaunay_dp, delaunay_facets
+from meshrepair.holes.liepa_roots import best_over_roots, program_roots
 
 if HAVE_NUMBA:
     from meshrepair._kernels import (
@@ -283,39 +284,41 @@ def min_weight_triangulation(P: np.ndarray, *, opposite: np.ndarray | None = Non
     """
     if search not in SEARCH_SPACES:
         raise MeshRepairError(f"search must be one of {SEARCH_SPACES}, got {search!r}")
-    P, N0, has0, forbid = _program_inputs(P, opposite, forbidden)
+    P, N0, has0, fb = _program_inputs(P, opposite, forbidden)
     k = len(P)
     if search == "delaunay":
-        T = _delaunay_optimum(P, N0, has0, forbid)
+        T = _delaunay_optimum(P, N0, has0, fb)
         if T is not None:
             return T
         log.debug("no triangulation of the %d-loop by Delaunay facets; searching all", k)
     dp = _nb_liepa_dp if HAVE_NUMBA else _np_liepa_dp
-    opt, bend, _ = dp(P, N0, has0, forbid, _DP_TOL)
-    if not np.isfinite(bend[0, k - 1]):
+
+    def full(Pr, N0r, has0r, forbid, s):
+        return dp(Pr, N0r, has0r, forbid, _DP_TOL)
+
+    roots = program_roots(P, full=True)
+    T = best_over_roots(full, P, N0, has0, fb, roots, _DP_TOL)
+    if T is None:
         log.info("no triangulation of the %d-loop avoids the existing edges; allowing them", k)
-        opt, bend, _ = dp(P, N0, has0, np.zeros((k, k), bool), _DP_TOL)
-    return _triangles(opt, k)
+        T = best_over_roots(full, P, N0, has0, fb[:0], roots, _DP_TOL)
+    return T
 
 
 def _program_inputs(P, opposite, forbidden):
-    """The loop positions checked, the normals of the faces on the loop edges and which exist,
-    and the ``(k, k)`` matrix of forbidden chords, for the dynamic programs."""
+    """The inputs of the dynamic programs: the loop positions checked, the normals of the faces
+    on the loop edges and which exist, and the forbidden chords ``(q, 2)`` in local indices."""
     P = _loop_positions(P)
     k = len(P)
     N0, has0 = _edge_normals(P, opposite)
-    forbid = np.zeros((k, k), bool)
+    fb = np.zeros((0, 2), dtype=np.int64)
     if forbidden is not None and len(forbidden):
         fb = np.asarray(forbidden, dtype=np.int64).reshape(-1, 2)
         if (fb < 0).any() or (fb >= k).any():
             raise MeshRepairError(f"forbidden chords must be local loop indices in [0, {k})")
-        lo, hi = fb.min(axis=1), fb.max(axis=1)
-        chord = (hi - lo >= 2) & ~((lo == 0) & (hi == k - 1))
-        forbid[lo[chord], hi[chord]] = True
-    return P, N0, has0, forbid
+    return P, N0, has0, fb
 
 
-def _delaunay_optimum(P, N0, has0, forbid) -> np.ndarray | None:
+def _delaunay_optimum(P, N0, has0, fb) -> np.ndarray | None:
     """The minimum-weight triangulation by the loop's Delaunay facets avoiding the forbidden
     chords (:mod:`meshrepair.holes.liepa_delaunay`), or None where there is none."""
     k = len(P)
@@ -323,9 +326,14 @@ def _delaunay_optimum(P, N0, has0, forbid) -> np.ndarray | None:
     if tri is None:
         return None
     ddp = _nb_delaunay_dp if HAVE_NUMBA else _py_delaunay_dp
-    opt, bend, _ = ddp(P, N0, has0, forbid, tri[:, 0].copy(), tri[:, 1].copy(), tri[:, 2].copy(),
-                       _DP_TOL)
-    return _triangles(opt, k) if np.isfinite(bend[0, k - 1]) else None
+
+    def restricted(Pr, N0r, has0r, forbid, s):
+        t = np.sort((tri - s) % k, axis=1)
+        t = t[np.lexsort((t[:, 1], t[:, 0], t[:, 2] - t[:, 0]))]  # delaunay_facets' order
+        return ddp(Pr, N0r, has0r, forbid, t[:, 0].copy(), t[:, 1].copy(), t[:, 2].copy(),
+                   _DP_TOL)
+
+    return best_over_roots(restricted, P, N0, has0, fb, program_roots(P, full=False), _DP_TOL)
 
 
 def delaunay_optimum(P: np.ndarray, *, opposite: np.ndarray | None = None,
@@ -334,17 +342,3 @@ def delaunay_optimum(P: np.ndarray, *, opposite: np.ndarray | None = None,
     ``forbidden`` chords: the ``(k - 2, 3)`` triangles, or None where the facets hold no such
     triangulation (no fallback to the full search)."""
     return _delaunay_optimum(*_program_inputs(P, opposite, forbidden))
-
-
-def _triangles(opt: np.ndarray, k: int) -> np.ndarray:
-    """The triangles ``(i, j, m)`` of the best apices ``opt`` of the whole loop ``[0, k-1]``."""
-    T = []
-    stack = [(0, k - 1)]
-    while stack:
-        i, j = stack.pop()
-        if j - i < 2:
-            continue
-        m = int(opt[i, j])
-        T.append((i, j, m))
-        stack += [(i, m), (m, j)]
-    return np.asarray(T, dtype=np.int64).reshape(-1, 3)
