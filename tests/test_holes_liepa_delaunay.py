@@ -183,14 +183,19 @@ def test_a_long_merged_loop_is_filled_without_crossing_the_surface():
         return len(self_intersections(Vc, Fn, faces=np.arange(len(Fc), len(Fn))))
 
     assert crossings(min_weight_triangulation(P, opposite=O, search="all")) > 100
-    dela = min_weight_triangulation(P, opposite=O)
-    assert crossings(dela) == 0
-    # enclose_holes refines the one that crosses fewer faces
+    # the Delaunay-facet optima of the eight roots share the largest angle; the first root's
+    # crosses the statue in 12 face pairs, some other roots' in none
+    from meshrepair.holes.liepa import delaunay_optima
+
+    per_root = [crossings(T) for T in delaunay_optima(P, opposite=O)]
+    assert per_root[0] > 0 and min(per_root) == 0
+    assert crossings(min_weight_triangulation(P, opposite=O)) == per_root[0]
+    # enclose_holes refines the first that crosses no face
     from meshrepair.holes.enclose import _liepa_coarse, _loop_chords
     from meshrepair.holes.refuse import _LocalFaces
 
     T = _liepa_coarse(loop, O, _loop_chords(Fc, loop), _LocalFaces(Vc, Fc), [], [], len(Vc))
-    assert np.array_equal(T, dela)
+    assert crossings(T) == 0
     r = mr.fill_holes(Vc, Fc)
     (h,) = r.holes
     assert h.status == "filled" and h.n_intersections == 0

@@ -1,15 +1,14 @@
 """Liepa's programs run from several roots read off the loop's geometry
 (:mod:`meshrepair.holes.liepa_roots`): the triangulation does not depend on where the loop's
-numbering starts, and its weight is the least over the roots."""
+numbering starts, nor do the alternatives tried where it crosses the mesh."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-import meshrepair.holes.liepa as L
-from meshrepair.holes.liepa import min_weight_triangulation
-from meshrepair.holes.liepa_roots import best_over_roots, program_roots
+from meshrepair.holes.liepa import delaunay_optima, min_weight_triangulation
+from meshrepair.holes.liepa_roots import alternative_roots, canonical_start
 
 
 def _wavy_loop(k: int, seed: int) -> tuple[np.ndarray, np.ndarray]:
@@ -40,36 +39,26 @@ def test_triangulation_does_not_depend_on_the_loop_start(search, seed):
         assert _as_set((T2 + shift) % k) == _as_set(T)
 
 
-def _weight(P, O, fb, roots, run):
-    """(bend, area) of the best triangulation over ``roots``, from the programs' own values."""
-    out = []
+def _is_triangulation(T: np.ndarray, k: int) -> bool:
+    """``k - 2`` triangles of the loop's vertices using every loop edge once, every chord twice."""
+    from collections import Counter
 
-    def spy(*args):
-        res = run(*args)
-        out.append((float(res[1][0, len(P) - 1]), float(res[2][0, len(P) - 1])))
-        return res
-
-    N0, has0 = L._edge_normals(P, O)
-    best_over_roots(spy, P, N0, has0, fb, roots, L._DP_TOL)
-    return out
+    e = Counter(tuple(sorted(p)) for t in T.tolist() for p in ((t[0], t[1]), (t[1], t[2]),
+                                                                 (t[2], t[0])))
+    loop = {tuple(sorted((i, (i + 1) % k))) for i in range(k)}
+    return (len(T) == k - 2 and all(e[x] == 1 for x in loop)
+            and all(c == 2 for x, c in e.items() if x not in loop))
 
 
-def test_kept_weight_is_the_least_over_the_roots():
-    k = 36
-    P, O = _wavy_loop(k, 5)
-    dp = L._np_liepa_dp
-
-    def full(Pr, N0r, has0r, forbid, s):
-        return dp(Pr, N0r, has0r, forbid, L._DP_TOL)
-
-    roots = program_roots(P, full=True)
-    assert len(roots) == 8 and len(set(roots)) == 8
-    per_root = _weight(P, O, np.zeros((0, 2), np.int64), roots, full)
-    T = min_weight_triangulation(P, opposite=O, search="all")
-    # the weight of the kept triangulation, recomputed from its triangles
-    n = np.cross(P[T[:, 1]] - P[T[:, 0]], P[T[:, 2]] - P[T[:, 0]])
-    area = 0.5 * np.linalg.norm(n, axis=1).sum()
-    best = min(per_root, key=lambda w: (round(w[0], 9), w[1]))
-    assert area == pytest.approx(best[1], rel=1e-12)
-    # the roots do differ here: one root alone would not always have found it
-    assert len({round(a, 9) for _, a in per_root}) > 1
+def test_alternatives_are_triangulations_and_do_not_depend_on_the_start():
+    k = 40
+    P, O = _wavy_loop(k, 4)
+    s0 = canonical_start(P)
+    roots = alternative_roots(P)
+    assert len(roots) == 7 and s0 not in roots and len(set(roots)) == 7
+    alts = list(delaunay_optima(P, opposite=O))
+    assert 0 < len(alts) <= 7 and all(_is_triangulation(T, k) for T in alts)
+    assert _is_triangulation(min_weight_triangulation(P, opposite=O), k)
+    shift = 11
+    alts2 = list(delaunay_optima(np.roll(P, -shift, axis=0), opposite=np.roll(O, -shift, axis=0)))
+    assert [_as_set((T + shift) % k) for T in alts2] == [_as_set(T) for T in alts]

@@ -23,6 +23,7 @@ from __future__ import annotations
 import numpy as np
 
 from meshrepair.errors import MeshRepairError
+from meshrepair.mesh.geometry import order_free_centroid
 
 MIN_ANGLE = 28.0
 """Minimum angle (degrees) asked of the 2-D constrained Delaunay triangulation."""
@@ -56,7 +57,7 @@ def _frame(X: np.ndarray) -> tuple[np.ndarray, float, np.ndarray]:
     """Centroid ``c``, RMS radius ``u`` and rotation ``R`` (rows: the canonical axes) of the
     points ``X`` (n, 2), independent of their order."""
     n = len(X)
-    c = np.sort(X, axis=0).sum(axis=0) / n
+    c = order_free_centroid(X)
     d = X - c
     r2 = (d * d).sum(axis=1)
     u = float(np.sqrt(np.sort(r2).sum() / n))

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import logging
 from collections.abc import Callable, Mapping, Sequence
+from itertools import chain
 
 import numpy as np
 
@@ -13,7 +14,7 @@ from meshrepair.holes._geom2d import Patch
 from meshrepair.holes.detect import Hole, HoleReport
 from meshrepair.holes.intersect import self_intersections
 from meshrepair.holes.islands import pair_islands
-from meshrepair.holes.liepa import delaunay_optimum, min_weight_triangulation
+from meshrepair.holes.liepa import delaunay_optima, delaunay_optimum, min_weight_triangulation
 from meshrepair.holes.planar import ENCLOSE_METHODS, _enclose_annulus, enclose_loop
 from meshrepair.holes.refuse import _coincident_loop_vertices, _LocalFaces, _patch_problem
 
@@ -303,7 +304,9 @@ def _liepa_coarse(loop: np.ndarray, opposite: np.ndarray, forbidden: np.ndarray,
     """Liepa's coarse triangulation of a loop of the mesh: of the minimum-weight triangulations
     over all triangles and over the loop's Delaunay facets
     (:func:`meshrepair.holes.min_weight_triangulation`), the one whose triangles cross fewer
-    faces of the mesh (and of the patches placed before), the first on a tie.
+    faces of the mesh (and of the patches placed before), the first on a tie; when both cross,
+    the Delaunay-facet optima from the alternative roots
+    (:func:`meshrepair.holes.liepa.delaunay_optima`) are tried in turn until one crosses none.
 
     The weight sees only the loop and the faces on its edges: where its optimum over all
     triangles crosses the surface further away (a long loop winding through space), the
@@ -318,11 +321,20 @@ def _liepa_coarse(loop: np.ndarray, opposite: np.ndarray, forbidden: np.ndarray,
         return int((pairs.min(axis=1) < len(Fl)).sum()) if len(pairs) else 0
 
     full = min_weight_triangulation(P, opposite=opposite, forbidden=forbidden, search="all")
-    n_full = crossings(full)
-    if n_full == 0:
+    best, n_best = full, crossings(full)
+    if n_best == 0:
         return full
     dela = delaunay_optimum(P, opposite=opposite, forbidden=forbidden)
-    return dela if dela is not None and crossings(dela) < n_full else full
+    alternatives = [] if dela is None else [dela]
+    alternatives = chain(alternatives, delaunay_optima(P, opposite=opposite,
+                                                       forbidden=forbidden))
+    for T in alternatives:
+        n = crossings(T)
+        if n < n_best:
+            best, n_best = T, n
+        if n == 0:
+            break
+    return best
 
 
 def _vertex_faces(F: np.ndarray, nV: int) -> tuple[np.ndarray, np.ndarray]:

@@ -12,7 +12,7 @@ from meshrepair._kernels import HAVE_NUMBA
 from meshrepair.errors import MeshRepairError
 from meshrepair.holes._geom2d import _loop_positions
 from meshrepair.holes.liepa_delaunay import _py_delaunay_dp, delaunay_facets
-from meshrepair.holes.liepa_roots import best_over_roots, program_roots
+from meshrepair.holes.liepa_roots import alternative_roots, canonical_start, optimum_from
 
 if HAVE_NUMBA:
     from meshrepair._kernels import (
@@ -296,11 +296,11 @@ def min_weight_triangulation(P: np.ndarray, *, opposite: np.ndarray | None = Non
     def full(Pr, N0r, has0r, forbid, s):
         return dp(Pr, N0r, has0r, forbid, _DP_TOL)
 
-    roots = program_roots(P, full=True)
-    T = best_over_roots(full, P, N0, has0, fb, roots, _DP_TOL)
+    s = canonical_start(P)
+    T = optimum_from(full, P, N0, has0, fb, s)
     if T is None:
         log.info("no triangulation of the %d-loop avoids the existing edges; allowing them", k)
-        T = best_over_roots(full, P, N0, has0, fb[:0], roots, _DP_TOL)
+        T = optimum_from(full, P, N0, has0, fb[:0], s)
     return T
 
 
@@ -318,9 +318,10 @@ def _program_inputs(P, opposite, forbidden):
     return P, N0, has0, fb
 
 
-def _delaunay_optimum(P, N0, has0, fb) -> np.ndarray | None:
+def _delaunay_optimum(P, N0, has0, fb, root: int | None = None) -> np.ndarray | None:
     """The minimum-weight triangulation by the loop's Delaunay facets avoiding the forbidden
-    chords (:mod:`meshrepair.holes.liepa_delaunay`), or None where there is none."""
+    chords (:mod:`meshrepair.holes.liepa_delaunay`), rooted at ``root`` (default:
+    :func:`~meshrepair.holes.liepa_roots.canonical_start`), or None where there is none."""
     k = len(P)
     tri = delaunay_facets(P)
     if tri is None:
@@ -333,7 +334,8 @@ def _delaunay_optimum(P, N0, has0, fb) -> np.ndarray | None:
         return ddp(Pr, N0r, has0r, forbid, t[:, 0].copy(), t[:, 1].copy(), t[:, 2].copy(),
                    _DP_TOL)
 
-    return best_over_roots(restricted, P, N0, has0, fb, program_roots(P, full=False), _DP_TOL)
+    root = canonical_start(P) if root is None else root
+    return optimum_from(restricted, P, N0, has0, fb, root)
 
 
 def delaunay_optimum(P: np.ndarray, *, opposite: np.ndarray | None = None,
@@ -342,3 +344,16 @@ def delaunay_optimum(P: np.ndarray, *, opposite: np.ndarray | None = None,
     ``forbidden`` chords: the ``(k - 2, 3)`` triangles, or None where the facets hold no such
     triangulation (no fallback to the full search)."""
     return _delaunay_optimum(*_program_inputs(P, opposite, forbidden))
+
+
+def delaunay_optima(P: np.ndarray, *, opposite: np.ndarray | None = None,
+                    forbidden: np.ndarray | None = None):
+    """The Delaunay-facet optima rooted at the
+    :func:`~meshrepair.holes.liepa_roots.alternative_roots`, in root order (a generator of
+    ``(k - 2, 3)`` triangulations; roots without one are left out): what
+    :func:`meshrepair.holes.enclose_holes` tries when the optima cross the mesh."""
+    args = _program_inputs(P, opposite, forbidden)
+    for s in alternative_roots(args[0]):
+        T = _delaunay_optimum(*args, root=s)
+        if T is not None:
+            yield T

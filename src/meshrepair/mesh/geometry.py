@@ -107,3 +107,10 @@ def vertex_normals(V: np.ndarray, F: np.ndarray) -> np.ndarray:
     from meshrepair._kernels import vertex_normals as _vertex_normals
 
     return _vertex_normals(V, F)
+
+
+def order_free_centroid(X: np.ndarray) -> np.ndarray:
+    """Mean of the rows of ``X`` (n, d), summed over each column sorted: the same bits in every
+    row order (a plain sum rounds differently when the rows are permuted), so decisions read
+    from it do not depend on the vertex numbering."""
+    return np.sort(X, axis=0).sum(axis=0) / len(X)

@@ -20,6 +20,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from meshrepair.mesh.geometry import order_free_centroid
+
 PROBE_SEED = 0
 
 
@@ -41,7 +43,7 @@ def canonical_order(V: np.ndarray, used: np.ndarray | None = None) -> np.ndarray
     used = np.ones(len(V), bool) if used is None else np.asarray(used, bool)
     if not used.any():
         return np.arange(len(V), dtype=np.int64)
-    c = np.sort(V[used], axis=0).sum(axis=0) / int(used.sum())
+    c = order_free_centroid(V[used])
     d = V - c
     d = np.where(used, np.einsum("ij,ij->i", d, d), np.inf)
     return np.argsort(d, kind="stable").astype(np.int64)
