@@ -559,6 +559,7 @@ def test_fill_accepts_trimesh_and_selection_options():
     ({"progress": "x"}, "progress must be callable"),
     ({"exclude": "a"}, "exclude must be hole indices"),
     ({"holes": [0, 1], "exclude": [1]}, "hole 1 is both selected"),
+    ({"holes": [0], "keep_border": True}, "hole 0 is the longest loop, which keep_border"),
     ({"fitted": True, "initial": "harmonic"}, "needs initial='bilaplacian'"),
 ])
 def test_fill_bad_options(kwargs, msg):

@@ -150,6 +150,9 @@ def fill_holes(
     if both:
         raise MeshRepairError(f"hole {both[0]} is both selected (holes=, --holes) and excluded "
                               "(exclude=, --exclude): name it in one of them")
+    if keep_border and holes is not None and 0 in holes:
+        raise MeshRepairError("hole 0 is the longest loop, which keep_border (--keep-border) "
+                              "keeps open as the mesh border: drop keep_border to fill it")
     found = _find_holes(V, F)
     borders, enclosure, notes = classify_loops(V, F, found)
     skip = select_holes(found, max_hole_size=max_hole_size, keep_border=keep_border,
