@@ -82,6 +82,12 @@ def test_an_edited_plan_runs_as_edited(noisy_fandisk):
     for text in (str(q), str(r.plan)):
         line = next(s for s in text.splitlines() if s.strip().startswith("lam "))
         assert f"{q.lam:.4g}" in line and "[user] edited" in line, line
+    # an edited field is the user's, not credited to a step after the solve
+    assert p.outside_weight > 1.0  # a CAD part
+    r = mr.denoise(V, F, plan=dataclasses.replace(p, outside_weight=0.5 * p.outside_weight))
+    assert not [d for d in r.plan.after_solve if d.name == "outside_weight"]
+    line = next(s for s in str(r.plan).splitlines() if s.strip().startswith("outside_weight"))
+    assert "[user] edited" in line, line
     # the records a plan carries are plans or None
     for name in ("if_correlated", "if_structured", "inner"):
         with pytest.raises(MeshRepairError, match=f"plan.{name} must be a DenoisePlan"):

@@ -8,7 +8,7 @@ fold-overs and the correlated-noise low-pass.
 from __future__ import annotations
 
 import logging
-from dataclasses import replace
+from dataclasses import fields, replace
 
 import numpy as np
 
@@ -86,7 +86,7 @@ def _execute(plan: DenoisePlan, V, F, callback=None, *, made_here: bool = False,
         r.V = _cl.apply(r.V, F, topo, gamma, info, impulsive, V, st.r1_V)
         r.params.update({k_: info[k_] for k_ in _cl.RECORDED})
         r.plan = as_record(plan, inner=r.plan,
-                           after_solve=_after(info, st.info, _cl.RECORDED))
+                           after_solve=_after(info, st.info, _cl.RECORDED, plan))
         return r
     info["presmooth_steps"] = 0
     reorder, inv, Fw, topo_w = st.reorder, st.inv, st.Fw, st.topo_w
@@ -205,7 +205,7 @@ def _execute(plan: DenoisePlan, V, F, callback=None, *, made_here: bool = False,
         iterations=res.iterations, stop_reason=res.stop_reason, noise_estimate=gamma,
         params=params, n_unfolded=st.n_unf,
         # the record keeps no arrays of the reading: it would hold the probe's result alive
-        plan=as_record(plan, after_solve=_after(info, st.info, ())),
+        plan=as_record(plan, after_solve=_after(info, st.info, (), plan)),
     )
 
 
@@ -358,13 +358,18 @@ _AFTER = {
 """What each record of the steps after the solve means (the stage's module has the maths)."""
 
 
-def _after(info: dict, before: dict, keys) -> tuple[Decision, ...]:
+_PLAN_FIELDS = frozenset(f.name for f in fields(DenoisePlan))
+
+
+def _after(info: dict, before: dict, keys, plan: DenoisePlan) -> tuple[Decision, ...]:
     """The decisions taken on the solve's result: every record of ``info`` the reading did not
-    hold (or that the run changed)."""
+    hold (or that the run changed), except a field of the ``plan`` at the plan's value (the
+    plan shows it, with who set it)."""
     out = []
     for k, v in info.items():
         if k in ("presmooth_steps", "start_from_probe") or (
-                k in before and before[k] == v and k not in keys):
+                k in before and before[k] == v and k not in keys) or (
+                k in _PLAN_FIELDS and getattr(plan, k) == v):
             continue
         if isinstance(v, (bool, int, float, str)) or v is None:
             out.append(Decision(k, v, _AFTER.get(k, "a step after the solve")))
