@@ -85,3 +85,15 @@ def test_triangle_sees_one_frame():
     T1 = np.sort(back[out["triangles"]], axis=1)
     T2 = np.sort(out2["triangles"], axis=1)
     assert set(map(tuple, T1.tolist())) == set(map(tuple, T2.tolist()))
+
+
+def test_points_closer_than_the_grid_stay_apart():
+    k = 30
+    a = 2 * np.pi * np.arange(k) / k
+    Q = np.c_[np.cos(a), np.sin(a)]
+    Q = np.insert(Q, 1, Q[0] + (1e-9, 1e-9), axis=0)  # a loop vertex 1.4e-9 from another
+    n = len(Q)
+    segs = np.c_[np.arange(n), (np.arange(n) + 1) % n]
+    out = triangulate({"vertices": Q, "segments": segs}, "pYQ", max_area=0.01)
+    assert np.array_equal(out["vertices"][:n], Q)
+    assert set(np.unique(out["triangles"])) >= set(range(n))  # every loop vertex is used

@@ -10,7 +10,8 @@ are not. So every call meets Triangle in one frame computed from the points them
   sorted values, so the same bits in every order);
 - rotate so the point farthest from ``c`` lies on the positive x axis;
 - round to a grid of :data:`QUANTUM` (in units of ``u``): coordinates that differ by rounding land
-  on the same grid point (unless they straddle a grid line: about 1e-7 per coordinate);
+  on the same grid point (unless they straddle a grid line: about 1e-7 per coordinate); points
+  closer than that stay unrounded, so Triangle still sees them apart;
 - list the points, segments and triangles in lexicographic order of the grid coordinates.
 
 Area bounds are divided by ``u²`` and rounded to single precision for the same reason. The
@@ -106,7 +107,10 @@ def triangulate(data: dict, opts: str, *, max_area: float | None = None) -> dict
     X = np.asarray(data["vertices"], dtype=np.float64).reshape(-1, 2)
     n = len(X)
     c, u, R = _frame(X)
-    Y = _grid((X - c) @ R.T / u)
+    Y = (X - c) @ R.T / u
+    G = _grid(Y)
+    if len(np.unique(G, axis=0)) == n:  # else two points closer than the grid: keep them apart
+        Y = G
     perm = np.lexsort((Y[:, 1], Y[:, 0]))  # canonical index -> caller's index
     rank = np.empty(n, dtype=np.int64)
     rank[perm] = np.arange(n)
