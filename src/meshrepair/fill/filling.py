@@ -122,14 +122,15 @@ def fill_holes(
     -------
     FillResult
         Original vertices and faces first in their original order, the new ones after. The input
-        arrays are never modified.
+        arrays are never modified. The patches do not depend on the mesh's vertex or face order,
+        rotation, scale or translation (the same new vertices and faces, positions up to the
+        rounding the solve carries; docs/holes.md, section 3).
 
     Raises
     ------
     MeshRepairError
         For invalid meshes (:func:`meshrepair.mesh.validate.check_mesh`) or options (e.g. a hole
-        index
-        that does not exist, a non-finite or out-of-range number), or when the selected holes
+        index that does not exist, a non-finite or out-of-range number), or when the selected holes
         would need more than :data:`meshrepair.holes.budget.MAX_NEW_FACES` new faces (estimated
         before any work; the message gives the count).
     """
