@@ -92,7 +92,7 @@ def register(subparsers) -> None:
     p.add_argument("--titles", nargs="+", default=None, help="one title per mesh")
     p.add_argument("--title", default=None, help="page title")
     p.add_argument("--reference", default=None, metavar="REF",
-                   help="ground truth: MSAE and E_V of meshes with its vertex count")
+                   help="ground truth: MSAE and E_V of meshes with its vertices and faces")
     p.add_argument("--sharp-threshold", type=angle_degrees, default=30.0, metavar="DEG",
                    help="dihedral angle of the sharp-edge overlay M_E (default 30)")
     p.add_argument("--face-budget", type=int, default=None, metavar="N",

@@ -92,10 +92,11 @@ def extract_patch(V, F, faces) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _compact(V: np.ndarray, F: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The patch ``(V, F)`` on the vertices its faces use
+    (:func:`meshrepair.mesh.topology.compact`)."""
     from meshrepair.mesh.topology import compact
 
-    _, Vc, Fc = compact(V, F)
-    return Vc, Fc
+    return compact(V, F)[1:]
 
 
 def load_transform(path_or_array) -> np.ndarray:

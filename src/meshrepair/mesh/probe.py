@@ -25,7 +25,6 @@ from meshrepair.mesh.geometry import order_free_centroid
 PROBE_SEED = 0
 
 
-
 def canonical_order(V: np.ndarray, used: np.ndarray | None = None) -> np.ndarray:
     """The vertices sorted by squared distance to the centroid of the ``used`` ones (ties by
     index), the others last in index order.
