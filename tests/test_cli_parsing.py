@@ -142,3 +142,31 @@ def test_unknown_option_far_from_every_option_gets_no_guess(meshes, tmp_path, ca
     err = capsys.readouterr().err
     assert "usage: meshrepair fill" in err and "unrecognized arguments: --xyz" in err
     assert "did you mean" not in err
+
+
+@pytest.mark.parametrize(("cmd", "flag", "usage"), [
+    ("denoise", "-o", "meshrepair denoise input [output]"),
+    ("fill", "--output", "meshrepair fill input [output]"),
+    ("render", "--out", "meshrepair render input output"),
+])
+def test_an_output_option_points_at_the_positional_output(meshes, tmp_path, capsys, cmd, flag,
+                                                          usage):
+    """Other tools name their output with -o / --output; here it is the second positional
+    argument, and the message says so instead of guessing an unrelated option."""
+    sphere, _ = meshes
+    out = tmp_path / ("o.png" if cmd == "render" else "o.ply")
+    with pytest.raises(SystemExit) as exc:
+        main([cmd, str(sphere), flag, str(out)])
+    assert exc.value.code == 2
+    err = capsys.readouterr().err
+    assert f"{flag}: the output file is given without an option, after the input: {usage}" in err
+    assert "did you mean" not in err
+    assert not out.exists()
+
+
+def test_a_one_letter_unknown_option_gets_no_guess(meshes, tmp_path, capsys):
+    sphere, _ = meshes
+    with pytest.raises(SystemExit):
+        main(["denoise", str(sphere), str(tmp_path / "o.ply"), "-x"])
+    err = capsys.readouterr().err
+    assert "unrecognized arguments: -x" in err and "did you mean" not in err

@@ -153,6 +153,8 @@ def _close_options(sub: argparse.ArgumentParser, token: str) -> list[str]:
     import difflib
 
     name = token.split("=", 1)[0].lstrip("-").lower()
+    if len(name) < 3:
+        return []  # a letter or two matches a word of too many options to point at one
     best: dict[str, float] = {}
     for o in _options(sub):
         if not o.startswith("--"):
@@ -165,6 +167,10 @@ def _close_options(sub: argparse.ArgumentParser, token: str) -> list[str]:
     if top < 0.6:
         return []
     return [o for o, r in best.items() if r >= top - 0.02][:3]
+
+
+_OUTPUT_FLAGS = frozenset({"o", "out", "output", "outfile", "output-file"})
+"""Options other tools name their output with; here the output is a positional argument."""
 
 
 def parse_or_explain(parser: argparse.ArgumentParser, argv: list[str]) -> argparse.Namespace:
@@ -181,7 +187,16 @@ def parse_or_explain(parser: argparse.ArgumentParser, argv: list[str]) -> argpar
     sub = _subparsers(parser).get(cmd) if cmd else None
     target = sub or parser
     hints = []
+    positional = ({a.dest: (f"[{a.metavar or a.dest}]" if a.nargs == "?" else
+                            str(a.metavar or a.dest))
+                   for a in sub._actions if not a.option_strings} if sub is not None else {})
     for t in extra:
+        name = t.split("=", 1)[0]
+        if name.lstrip("-").lower() in _OUTPUT_FLAGS and "output" in positional:
+            names = " ".join(v for k, v in positional.items() if k != "command")
+            hints.append(f"{name}: the output file is given without an option, after the "
+                         f"input: {sub.prog} {names}")
+            continue
         if t.startswith("-") and sub is not None:
             close = _close_options(sub, t)
             if close:
