@@ -170,3 +170,12 @@ def test_a_one_letter_unknown_option_gets_no_guess(meshes, tmp_path, capsys):
         main(["denoise", str(sphere), str(tmp_path / "o.ply"), "-x"])
     err = capsys.readouterr().err
     assert "unrecognized arguments: -x" in err and "did you mean" not in err
+
+
+def test_a_stray_word_output_is_not_read_as_an_option(meshes, tmp_path, capsys):
+    sphere, _ = meshes
+    with pytest.raises(SystemExit):
+        main(["denoise", str(sphere), str(tmp_path / "o.ply"), "output"])
+    err = capsys.readouterr().err
+    assert "unrecognized arguments: output" in err
+    assert "given without an option" not in err

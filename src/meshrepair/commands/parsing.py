@@ -176,7 +176,8 @@ _OUTPUT_FLAGS = frozenset({"o", "out", "output", "outfile", "output-file"})
 def parse_or_explain(parser: argparse.ArgumentParser, argv: list[str]) -> argparse.Namespace:
     """``parser.parse_args(argv)``, except that arguments the sub-command does not know are
     reported with the sub-command's usage (not the top-level one) and, for each unknown option,
-    the closest known one (``--iterations`` -> ``did you mean --iters?``). Exits with status 2,
+    the closest known one (``--iterations`` -> ``did you mean --iters?``), or, for an output
+    option other tools have (``-o``, ``--output``), where the output goes. Exits with status 2,
     as argparse does."""
     import sys
 
@@ -192,7 +193,8 @@ def parse_or_explain(parser: argparse.ArgumentParser, argv: list[str]) -> argpar
                    for a in sub._actions if not a.option_strings} if sub is not None else {})
     for t in extra:
         name = t.split("=", 1)[0]
-        if name.lstrip("-").lower() in _OUTPUT_FLAGS and "output" in positional:
+        if (t.startswith("-") and name.lstrip("-").lower() in _OUTPUT_FLAGS
+                and "output" in positional):
             names = " ".join(v for k, v in positional.items() if k != "command")
             hints.append(f"{name}: the output file is given without an option, after the "
                          f"input: {sub.prog} {names}")
