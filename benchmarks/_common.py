@@ -44,6 +44,20 @@ CACHE = Path(os.environ.get("MESHREPAIR_BENCH_CACHE",
 _LIMITER = None
 
 
+def keyword_option(text: str) -> tuple[str, object]:
+    """``KEY=VALUE`` of a ``--option`` argument as ``(key, value)``: the value read as a Python
+    literal (``3``, ``0.5``, ``False``, ``(1, 2)``), else kept as the string."""
+    import ast
+
+    key, sep, value = text.partition("=")
+    if not sep or not key:
+        raise SystemExit(f"--option takes KEY=VALUE, not {text!r}")
+    try:
+        return key, ast.literal_eval(value)
+    except (ValueError, SyntaxError):
+        return key, value
+
+
 def limit_threads(n: int = 1) -> None:
     """Limit every BLAS/OpenMP pool loaded so far (and later, via the env vars) to ``n``."""
     global _LIMITER

@@ -37,7 +37,8 @@ from meshrepair.metrics import distances
 
 
 MESHREPAIR_OPTIONS: dict = {}
-"""Keyword options of meshrepair's ``fill_holes`` in the benchmarks (``holes.py --fitted``)."""
+"""Keyword options of meshrepair's ``fill_holes`` in the benchmarks (``holes.py --fitted``,
+``--option KEY=VALUE``)."""
 
 LAST_NOTES: list[str] = []
 """The skipped loops and the notes of meshrepair's last fill (index, edges, status, reason,

@@ -39,7 +39,8 @@ Issue 28 (``benchmarks/_holes_protocol.py``): ``protocol`` cuts 3 discs of r = 4
 (three seeds) from every shared real mesh with :func:`meshrepair.synthetic.cut_holes` and fills
 them with meshrepair, CGAL, MeshLib ``fillHole`` / ``fillHoleNicely``, PyMeshLab and pymeshfix
 (``--meshes``, ``--radii``, ``--seeds``, ``--methods``, ``--jsonl`` to keep the records,
-``--from-jsonl`` to print their table).
+``--from-jsonl`` to print their table; ``--option KEY=VALUE`` passes a keyword to meshrepair's
+``fill_holes``, e.g. ``--option triharmonic=False`` for the ablation of docs/holes.md section 5).
 
 Usage: ``python benchmarks/holes.py [--enclose auto,liepa] [--cases cut,bunny,denoise,real,peers]``
 (about a minute). ``--enclose`` sets the order in which
@@ -304,6 +305,9 @@ def main() -> None:
     ap.add_argument("--fitted", action="store_true",
                     help="meshrepair fills with fill_holes(fitted=True) (the fitted-surface "
                          "candidate, docs/holes.md section 5)")
+    ap.add_argument("--option", action="append", default=[], metavar="KEY=VALUE",
+                    help="a keyword of meshrepair's fill_holes in the protocol and peers cases "
+                         "(repeatable), e.g. triharmonic=False")
     ap.add_argument("--picture", metavar="PNG", default=None,
                     help="only write the bunny before/after picture (docs/img/holes_bunny.png)")
     ap.add_argument("--crease-picture", metavar="PNG", default=None,
@@ -370,10 +374,13 @@ def main() -> None:
             _holes_peers.run_peers(cut_disc, lines, notes, sm,
                                    [x.strip() for x in args.cad.split(",") if x.strip()])
             lines.extend(notes)
-    if args.fitted:
+    if args.fitted or args.option:
         import _holes_peers
 
-        _holes_peers.MESHREPAIR_OPTIONS["fitted"] = True
+        if args.fitted:
+            _holes_peers.MESHREPAIR_OPTIONS["fitted"] = True
+        _holes_peers.MESHREPAIR_OPTIONS.update(_common.keyword_option(o) for o in args.option)
+        print(f"meshrepair fill_holes options: {_holes_peers.MESHREPAIR_OPTIONS}", flush=True)
     if "protocol" in cases:
         import _holes_protocol
 

@@ -126,18 +126,6 @@ def run(case, noisy, truth, eps: float, seed: int, options: dict | None = None, 
             "solve_trace": _trace(r0.history, r1.history)}
 
 
-def _option(text: str) -> tuple[str, object]:
-    import ast
-
-    key, sep, value = text.partition("=")
-    if not sep or not key:
-        raise SystemExit(f"--option takes KEY=VALUE, not {text!r}")
-    try:
-        return key, ast.literal_eval(value)
-    except (ValueError, SyntaxError):
-        return key, value
-
-
 def moved_params(p0: dict, p1: dict, rel: float = 1e-3) -> dict:
     """The scalar entries of ``params`` that differ by more than ``rel`` (relative) between the
     two runs, ``{name: (value, jittered value)}``: the decisions that sit on a knife edge."""
@@ -177,7 +165,7 @@ def main(argv=None) -> None:
     ap.add_argument("--seeds", type=int, default=1, metavar="N",
                     help="N jitters per case (seeds seed .. seed+N-1): largest |change|, range")
     args = ap.parse_args(argv)
-    options = dict(_option(o) for o in args.option)
+    options = dict(C.keyword_option(o) for o in args.option)
     if not (np.isfinite(args.eps) and args.eps > 0):
         raise SystemExit("--eps must be a positive finite number")
     if args.seeds < 1:
