@@ -25,6 +25,7 @@ import numpy as np
 
 from meshrepair.errors import MeshRepairError
 from meshrepair.mesh.geometry import order_free_centroid
+from meshrepair.mesh.topology import least_first, row_order
 
 MIN_ANGLE = 28.0
 """Minimum angle (degrees) asked of the 2-D constrained Delaunay triangulation."""
@@ -76,11 +77,6 @@ def _single(a) -> np.ndarray:
     return np.asarray(a, dtype=np.float64).astype(np.float32).astype(np.float64)
 
 
-def _rows_sorted(A: np.ndarray) -> np.ndarray:
-    """Order of the rows of the integer array ``A`` (lexicographic, first column first)."""
-    return np.lexsort(A.T[::-1]) if len(A) else np.arange(0)
-
-
 def triangulate(data: dict, opts: str, *, max_area: float | None = None) -> dict:
     """``triangle.triangulate(data, opts)`` in the canonical frame of ``data["vertices"]``.
 
@@ -111,24 +107,22 @@ def triangulate(data: dict, opts: str, *, max_area: float | None = None) -> dict
     G = _grid(Y)
     if len(np.unique(G, axis=0)) == n:  # else two points closer than the grid: keep them apart
         Y = G
-    perm = np.lexsort((Y[:, 1], Y[:, 0]))  # canonical index -> caller's index
+    perm = row_order(Y)  # canonical index -> caller's index
     rank = np.empty(n, dtype=np.int64)
     rank[perm] = np.arange(n)
     cd: dict = {"vertices": Y[perm]}
     if "segments" in data:
         S = np.sort(rank[np.asarray(data["segments"], dtype=np.int64).reshape(-1, 2)], axis=1)
-        o = _rows_sorted(S)
+        o = row_order(S)
         cd["segments"] = S[o]
         if "segment_markers" in data:
             cd["segment_markers"] = np.asarray(data["segment_markers"]).reshape(len(S), -1)[o]
     if "holes" in data:
         H = _grid((np.asarray(data["holes"], dtype=np.float64).reshape(-1, 2) - c) @ R.T / u)
-        cd["holes"] = H[np.lexsort((H[:, 1], H[:, 0]))]
+        cd["holes"] = H[row_order(H)]
     if "triangles" in data:
-        T = rank[np.asarray(data["triangles"], dtype=np.int64).reshape(-1, 3)]
-        first = np.argmin(T, axis=1)[:, None]
-        T = np.take_along_axis(T, (first + np.arange(3)) % 3, axis=1)  # same orientation
-        o = _rows_sorted(T)
+        T = least_first(rank[np.asarray(data["triangles"], dtype=np.int64).reshape(-1, 3)])
+        o = row_order(T)
         cd["triangles"] = T[o]
         if "triangle_max_area" in data:
             b = np.asarray(data["triangle_max_area"], dtype=np.float64).ravel()[o]

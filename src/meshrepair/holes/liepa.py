@@ -318,12 +318,14 @@ def _program_inputs(P, opposite, forbidden):
     return P, N0, has0, fb
 
 
-def _delaunay_optimum(P, N0, has0, fb, root: int | None = None) -> np.ndarray | None:
-    """The minimum-weight triangulation by the loop's Delaunay facets avoiding the forbidden
-    chords (:mod:`meshrepair.holes.liepa_delaunay`), rooted at ``root`` (default:
+def _delaunay_optimum(P, N0, has0, fb, root: int | None = None,
+                      tri: np.ndarray | None = None) -> np.ndarray | None:
+    """The minimum-weight triangulation by the loop's Delaunay facets ``tri`` (default: computed
+    here, :func:`~meshrepair.holes.liepa_delaunay.delaunay_facets`) avoiding the forbidden
+    chords, rooted at ``root`` (default:
     :func:`~meshrepair.holes.liepa_roots.canonical_start`), or None where there is none."""
     k = len(P)
-    tri = delaunay_facets(P)
+    tri = delaunay_facets(P) if tri is None else tri
     if tri is None:
         return None
     ddp = _nb_delaunay_dp if HAVE_NUMBA else _py_delaunay_dp
@@ -353,7 +355,10 @@ def delaunay_optima(P: np.ndarray, *, opposite: np.ndarray | None = None,
     ``(k - 2, 3)`` triangulations; roots without one are left out): what
     :func:`meshrepair.holes.enclose_holes` tries when the optima cross the mesh."""
     args = _program_inputs(P, opposite, forbidden)
+    tri = delaunay_facets(args[0])
+    if tri is None:
+        return
     for s in alternative_roots(args[0]):
-        T = _delaunay_optimum(*args, root=s)
+        T = _delaunay_optimum(*args, root=s, tri=tri)
         if T is not None:
             yield T

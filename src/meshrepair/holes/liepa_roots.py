@@ -25,6 +25,7 @@ from collections.abc import Callable
 import numpy as np
 
 from meshrepair.mesh.geometry import order_free_centroid
+from meshrepair.mesh.topology import least_first, row_order
 
 ROOTS = 8
 """Roots spread along a loop: the canonical one and the alternatives (fewer on loops of fewer
@@ -77,10 +78,8 @@ def _unrolled(T: np.ndarray, s: int, k: int) -> np.ndarray:
     """Triangles ``(i, j, m)`` of the loop rolled to start at ``s``, in the caller's local
     indices: each listed again from its least index, which keeps ``i < m < j`` (a cyclic shift
     keeps the cyclic order of three loop vertices, so the orientation), rows sorted."""
-    T = (T + s) % k
-    first = np.argmin(T, axis=1)[:, None]
-    T = np.take_along_axis(T, (first + np.arange(3)) % 3, axis=1)
-    return T[np.lexsort(T.T[::-1])] if len(T) else T
+    T = least_first((T + s) % k)
+    return T[row_order(T)]
 
 
 def optimum_from(run: Callable, P: np.ndarray, N0: np.ndarray, has0: np.ndarray,

@@ -283,3 +283,19 @@ def compact(V: np.ndarray, F: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.nd
     new = np.full(len(V), -1, np.int64)
     new[idx] = np.arange(len(idx))
     return idx, V[idx], new[np.asarray(F)]
+
+
+def least_first(T: np.ndarray) -> np.ndarray:
+    """Each triangle of ``T`` (t, 3) listed from its least vertex index by a cyclic shift, which
+    keeps its orientation: one spelling of a face whatever vertex it was listed from."""
+    T = np.asarray(T, dtype=np.int64).reshape(-1, 3)
+    first = np.argmin(T, axis=1)[:, None]
+    return np.take_along_axis(T, (first + np.arange(3)) % 3, axis=1)
+
+
+def row_order(A: np.ndarray) -> np.ndarray:
+    """Order of the rows of ``A`` (n, m), lexicographic with the first column first (a stable
+    sort: equal rows keep their order)."""
+    A = np.asarray(A)
+    return np.lexsort(A.T[::-1]) if len(A) else np.arange(0)
+
