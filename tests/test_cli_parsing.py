@@ -164,12 +164,23 @@ def test_an_output_option_points_at_the_positional_output(meshes, tmp_path, caps
     assert not out.exists()
 
 
-def test_a_one_letter_unknown_option_gets_no_guess(meshes, tmp_path, capsys):
+@pytest.mark.parametrize(("cmd", "bad", "hint"), [
+    ("denoise", "-n", "did you mean --n-solver?"),
+    ("fill", "-n", "did you mean --no-refine?"),  # not --save-on-interrupt by its "on"
+    ("denoise", "-x", None),
+    ("denoise", "-s", None),  # save-mask, save-on-interrupt, inner-solver, n-solver: no one
+])
+def test_a_one_letter_unknown_option_is_matched_by_a_word_prefix(meshes, tmp_path, capsys, cmd,
+                                                                 bad, hint):
     sphere, _ = meshes
     with pytest.raises(SystemExit):
-        main(["denoise", str(sphere), str(tmp_path / "o.ply"), "-x"])
+        main([cmd, str(sphere), str(tmp_path / "o.ply"), bad])
     err = capsys.readouterr().err
-    assert "unrecognized arguments: -x" in err and "did you mean" not in err
+    assert f"unrecognized arguments: {bad}" in err
+    if hint is None:
+        assert "did you mean" not in err
+    else:
+        assert f"{bad}: {hint}" in err
 
 
 def test_a_stray_word_output_is_not_read_as_an_option(meshes, tmp_path, capsys):

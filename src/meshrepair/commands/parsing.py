@@ -149,18 +149,18 @@ def document_defaults(parser: argparse.ArgumentParser) -> None:
 def _close_options(sub: argparse.ArgumentParser, token: str) -> list[str]:
     """The options of ``sub`` closest to the unknown ``token``: difflib's ratio to the whole
     option or to one of its words (``--iterations`` is close to ``--feature-iters`` by its word
-    ``iters``); the best, and any as close, if at least 0.6."""
+    ``iters``); the best, and any as close, if at least 0.6. A token of one or two letters
+    (``-n``) is too short for a ratio (it is close to every short word): the options with a word
+    starting with it, when there are at most three."""
     import difflib
 
     name = token.split("=", 1)[0].lstrip("-").lower()
+    words = {o: [o[2:], *o[2:].split("-")] for o in _options(sub) if o.startswith("--")}
     if len(name) < 3:
-        return []  # a letter or two matches a word of too many options to point at one
-    best: dict[str, float] = {}
-    for o in _options(sub):
-        if not o.startswith("--"):
-            continue
-        words = [o[2:], *o[2:].split("-")]
-        best[o] = max(difflib.SequenceMatcher(None, name, w).ratio() for w in words)
+        hits = [o for o, ws in words.items() if any(w.startswith(name) for w in ws)]
+        return hits if 0 < len(hits) <= 3 else []
+    best = {o: max(difflib.SequenceMatcher(None, name, w).ratio() for w in ws)
+            for o, ws in words.items()}
     if not best:
         return []
     top = max(best.values())
