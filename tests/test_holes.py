@@ -342,13 +342,14 @@ def test_liepa_developed_and_mean_value_layouts(monkeypatch):
     from functools import partial
 
     from meshrepair.holes import liepa_refine as LR
+    from meshrepair.holes.liepa_layout import _unfold
 
     monkeypatch.setattr(LR, "min_weight_triangulation",
                         partial(min_weight_triangulation, search="all"))
     t = np.linspace(0, 2 * np.pi, 121)[:-1]
     P = np.c_[np.cos(t), np.sin(t), 2.0 * np.cos(4 * t)]
     k = len(P)
-    assert LR._unfold(P, LR._orient_patch(min_weight_triangulation(P), k)) is not None
+    assert _unfold(P, LR._orient_patch(min_weight_triangulation(P), k)) is not None
     patch = enclose_loop(P, method="liepa")
     assert np.allclose(np.linalg.norm(patch.uv[:k], axis=1), 1.0)
     X, T = patch.X, patch.T

@@ -12,7 +12,7 @@ from meshrepair.fill import fill_holes, inpaint
 from meshrepair.holes import find_holes
 from meshrepair.holes.border import BORDER_AREA_RATIO, border_ratios, component_areas, find_borders
 from meshrepair.holes.budget import MAX_NEW_FACES, estimate_patch_faces
-from meshrepair.holes.liepa_refine import _bary, _locate
+from meshrepair.holes.liepa_layout import _bary, _locate
 from meshrepair.mesh.topology import connected_components
 from meshrepair.mesh.validate import check_mesh
 
