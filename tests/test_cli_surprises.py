@@ -35,6 +35,29 @@ def test_progress_bar_counts_the_pass_the_summary_reports(capsys):
     bar.close()
 
 
+@pytest.mark.parametrize("name", ["fandisk_noisy.ply", "trim_star.ply"])
+def test_progress_bar_lengths_come_from_the_plan(name):
+    # the bar of the first pass is as long as the plan's stages, and no pass runs past its bar
+    from meshrepair.commands.denoise import pass_lengths
+
+    m = read_mesh(data_path(name))
+    V = m.V if name.endswith("noisy.ply") else mr.add_noise(m.V, m.F, 0.3, seed=2)
+    p = mr.plan_denoise(V, m.F)
+    first, later = pass_lengths(p)
+    assert first == sum(s.max_iter for s in (p.inner or p).stages) and later >= first
+    bar = ProgressBar(first, "denoise", enabled=True, later=later)
+    worst = []
+
+    def cb(entry):
+        bar(entry)
+        worst.append(bar.bar.n <= bar.bar.total)
+
+    r = mr.denoise(V, m.F, plan=p, callback=cb)
+    bar.close()
+    assert all(worst) and bar.bar.n == r.iterations
+    np.testing.assert_array_equal(r.V, mr.denoise(V, m.F).V)  # the plan's run is the default
+
+
 def test_progress_bar_one_pass_has_no_note():
     bar = ProgressBar(10, "x", enabled=False)
     for k in range(1, 6):

@@ -108,11 +108,14 @@ class ProgressBar:
     (``denoise`` solves again after a check of its first result): an entry whose ``iter``
     does not follow the previous one starts a new pass, and the bar starts again from 0 under
     ``desc (pass N)``, so that it counts the iterations of the pass the summary reports.
-    ``passes`` and ``count`` (iterations of all passes) are kept for that summary.
+    ``passes`` and ``count`` (iterations of all passes) are kept for that summary. ``total`` is
+    the first pass's length, ``later`` (default ``total``) that of the passes after it.
     """
 
-    def __init__(self, total: int | None, desc: str, enabled: bool = True):
+    def __init__(self, total: int | None, desc: str, enabled: bool = True, *,
+                 later: int | None = None):
         self.total, self.desc, self.enabled = total, desc, enabled
+        self.later = total if later is None else later  # the total of the passes after the first
         self.bar = None
         self.passes = 0
         self.count = 0
@@ -132,7 +135,7 @@ class ProgressBar:
 
             self.bar = tqdm(total=self.total, desc=self.desc, unit="it", leave=False)
         elif new_pass:
-            self.bar.reset(total=self.total)
+            self.bar.reset(total=self.later)
             self.bar.set_description(f"{self.desc} (pass {self.passes})")
         self.bar.update(1)
         self.bar.set_postfix(stage=entry.get("stage", ""), change=f"{entry['rel_change']:.1e}")

@@ -45,7 +45,7 @@ def holes_note(V: np.ndarray, F: np.ndarray, out) -> str:
 
 
 def run_denoise(args: argparse.Namespace) -> int:
-    from meshrepair.denoise.api import denoise
+    from meshrepair.denoise.api import denoise, plan_denoise
     from meshrepair.io import read_mesh, write_like_input
     from meshrepair.model.solver import StopRequested
 
@@ -58,17 +58,18 @@ def run_denoise(args: argparse.Namespace) -> int:
                               "and write nothing)")
     out, log_path, report_path = run_outputs(args, [args.input], output=args.output)
     m = read_mesh(args.input)
-    total = (args.robust_iters if args.robust_iters is not None else 40) + args.feature_iters
-    bar = ProgressBar(total, "denoise", enabled=not args.quiet)
+    t0 = time.perf_counter()
+    plan = plan_denoise(m.V, m.F, **denoise_options(args, output=False))
+    first, later = pass_lengths(plan)
+    bar = ProgressBar(first, "denoise", enabled=not args.quiet, later=later)
     latest: dict = {}
 
     def cb(entry):
         bar(entry)
         latest["entry"] = entry
 
-    t0 = time.perf_counter()
     try:
-        r = denoise(m.V, m.F, **denoise_options(args, output=False), callback=cb)
+        r = denoise(m.V, m.F, plan=plan, callback=cb)
     except StopRequested:  # pragma: no cover - denoise returns on StopRequested
         raise
     finally:
@@ -108,6 +109,24 @@ def run_denoise(args: argparse.Namespace) -> int:
                      timings={"total s": dt}, overwrite=args.force)
         print(f"wrote {report_path}")
     return 0
+
+
+def pass_lengths(plan) -> tuple[int, int]:
+    """The progress bar's lengths for a run of ``plan``: the iterations of the solve that runs
+    first (the plan of the low-passed input when the plan has one) and the most of any solve
+    that may run after it (the correlated-noise or organic alternative, each one's stages
+    summed); a solve stops earlier when its relative change falls below ``tol``."""
+    def tree(p):
+        yield p
+        for q in (p.inner, p.if_correlated, p.if_structured):
+            if q is not None:
+                yield from tree(q)
+
+    def length(p) -> int:
+        return int(sum(s.max_iter for s in p.stages))
+
+    start = plan.inner if plan.inner is not None else plan
+    return length(start), max(length(q) for q in tree(plan))
 
 
 def _explain(args: argparse.Namespace) -> int:
@@ -180,7 +199,7 @@ def run_metrics(args: argparse.Namespace) -> int:
 def run_demo(args: argparse.Namespace) -> int:
     from importlib.resources import files
 
-    from meshrepair.denoise.api import denoise
+    from meshrepair.denoise.api import denoise, plan_denoise
     from meshrepair.io import read_mesh, write_mesh
     from meshrepair.metrics import msae, vertex_error
 
@@ -194,9 +213,11 @@ def run_demo(args: argparse.Namespace) -> int:
     print("meshrepair demo: feature-aware denoising of the fandisk CAD part")
     print("  input: published noisy fandisk (Gaussian noise, 0.3 mean edge lengths), "
           f"{len(noisy.V)} vertices")
-    bar = ProgressBar(100, "denoise", enabled=not args.quiet)
     t0 = time.perf_counter()
-    r = denoise(noisy.V, noisy.F, callback=bar)
+    plan = plan_denoise(noisy.V, noisy.F)
+    first, later = pass_lengths(plan)
+    bar = ProgressBar(first, "denoise", enabled=not args.quiet, later=later)
+    r = denoise(noisy.V, noisy.F, plan=plan, callback=bar)
     bar.close()
     dt = time.perf_counter() - t0
     write_mesh(out, r.V, r.F, overwrite=args.force)
