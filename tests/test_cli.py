@@ -110,18 +110,20 @@ def test_repair_commands_write_html_report(tmp_path):
     assert "noise estimate" in rep2.read_text()
 
 
-def _ctrl_c_at_iteration(monkeypatch, k: int = 3) -> dict:
+def _ctrl_c_at_iteration(monkeypatch, k: int = 3, *, reading: bool = False) -> dict:
     """Make the CLI's progress bar raise KeyboardInterrupt at the ``k``-th solver iteration (as
-    Ctrl-C does there); returns the call counter."""
+    Ctrl-C does there) of the main solve, or with ``reading`` of denoise's reading (its probe);
+    returns the call counter."""
     from meshrepair.commands import common
 
     calls = {"n": 0}
     orig = common.ProgressBar.__call__
 
     def interrupt(self, entry):
-        calls["n"] += 1
-        if calls["n"] == k:
-            raise KeyboardInterrupt
+        if (self.desc == "reading") == reading:
+            calls["n"] += 1
+            if calls["n"] == k:
+                raise KeyboardInterrupt
         orig(self, entry)
 
     monkeypatch.setattr(common.ProgressBar, "__call__", interrupt)
@@ -139,6 +141,18 @@ def test_ctrl_c_stops_cleanly(tmp_path, monkeypatch, save):
         assert read_mesh(out).V.shape == read_mesh(SPOT).V.shape
     else:
         assert rc == 130 and not out.exists()
+
+
+@pytest.mark.parametrize("save", [False, True])
+def test_ctrl_c_during_the_reading_writes_nothing(tmp_path, monkeypatch, capsys, save):
+    """Ctrl-C while denoise reads the input (its probe, before the main solve) stops the
+    command: exit 130, nothing written, even with --save-on-interrupt (there is no iterate of
+    the main solve to save); the probe used to swallow it and the main solve ran anyway."""
+    calls = _ctrl_c_at_iteration(monkeypatch, reading=True)
+    out = tmp_path / "o.ply"
+    rc = main(["denoise", str(SPOT), str(out)] + (["--save-on-interrupt"] if save else []))
+    assert calls["n"] == 3 and rc == 130 and not out.exists()
+    assert "interrupted" in capsys.readouterr().err
 
 
 @pytest.mark.parametrize("save", [False, True])

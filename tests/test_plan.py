@@ -65,6 +65,37 @@ def test_running_the_plan_equals_the_one_shot_call(case, request):
         assert "low-passed by" in p.explain() and "the plan `inner` runs" in p.explain()
 
 
+@pytest.mark.parametrize("case", ["noisy_fandisk", "heavy_spot"])
+def test_the_readings_progress_sees_the_probe_and_changes_nothing(case, request):
+    # plan_denoise's callback gets each iteration of the probe (and of the low-passed input's
+    # probe, for the heavy noise plan), and the plan is the one made without it
+    V, F = request.getfixturevalue(case)
+    seen: list[dict] = []
+    p = mr.plan_denoise(V, F, callback=seen.append)
+    assert p == mr.plan_denoise(V, F) and str(p) == str(mr.plan_denoise(V, F))
+    restarts = sum(b["iter"] <= a["iter"] for a, b in zip(seen, seen[1:], strict=False))
+    assert len(seen) >= 3 and all(e["stage"] == "robust" for e in seen)
+    assert restarts == (1 if case == "heavy_spot" else 0)  # one probe per input read
+
+
+def test_a_stop_during_the_reading_is_raised_again(noisy_fandisk):
+    # a plan is not made from part of the probe: Ctrl-C and StopRequested reach the caller
+    from meshrepair.model.solver import StopRequested
+
+    def stop_at(k, exc):
+        def cb(entry):
+            if entry["iter"] == k:
+                raise exc
+        return cb
+
+    with pytest.raises(KeyboardInterrupt):
+        mr.plan_denoise(*noisy_fandisk, callback=stop_at(2, KeyboardInterrupt))
+    with pytest.raises(StopRequested, match="reading"):
+        mr.plan_denoise(*noisy_fandisk, callback=stop_at(2, StopRequested()))
+    with pytest.raises(MeshRepairError, match="callback"):
+        mr.plan_denoise(*noisy_fandisk, callback=3)
+
+
 def _same_params(a, b):
     if a.keys() != b.keys():
         return False

@@ -45,7 +45,7 @@ def holes_note(V: np.ndarray, F: np.ndarray, out) -> str:
 
 
 def run_denoise(args: argparse.Namespace) -> int:
-    from meshrepair.denoise.api import denoise, plan_denoise
+    from meshrepair.denoise.api import denoise
     from meshrepair.io import read_mesh, write_like_input
     from meshrepair.model.solver import StopRequested
 
@@ -59,7 +59,7 @@ def run_denoise(args: argparse.Namespace) -> int:
     out, log_path, report_path = run_outputs(args, [args.input], output=args.output)
     m = read_mesh(args.input)
     t0 = time.perf_counter()
-    plan = plan_denoise(m.V, m.F, **denoise_options(args, output=False))
+    plan = read_with_progress(m.V, m.F, denoise_options(args, output=False), args.quiet)
     first, later = pass_lengths(plan)
     bar = ProgressBar(first, "denoise", enabled=not args.quiet, later=later)
     latest: dict = {}
@@ -109,6 +109,19 @@ def run_denoise(args: argparse.Namespace) -> int:
                      timings={"total s": dt}, overwrite=args.force)
         print(f"wrote {report_path}")
     return 0
+
+
+def read_with_progress(V, F, options: dict, quiet: bool):
+    """:func:`meshrepair.plan_denoise` with a progress counter ``reading`` of its probe's
+    iterations (the probe of a large scan takes a while before the main solve starts; it stops
+    by its own rule, so the counter has no total)."""
+    from meshrepair.denoise.api import plan_denoise
+
+    bar = ProgressBar(None, "reading", enabled=not quiet)
+    try:
+        return plan_denoise(V, F, **options, callback=bar)
+    finally:
+        bar.close()
 
 
 def pass_lengths(plan) -> tuple[int, int]:
@@ -199,7 +212,7 @@ def run_metrics(args: argparse.Namespace) -> int:
 def run_demo(args: argparse.Namespace) -> int:
     from importlib.resources import files
 
-    from meshrepair.denoise.api import denoise, plan_denoise
+    from meshrepair.denoise.api import denoise
     from meshrepair.io import read_mesh, write_mesh
     from meshrepair.metrics import msae, vertex_error
 
@@ -214,7 +227,7 @@ def run_demo(args: argparse.Namespace) -> int:
     print("  input: published noisy fandisk (Gaussian noise, 0.3 mean edge lengths), "
           f"{len(noisy.V)} vertices")
     t0 = time.perf_counter()
-    plan = plan_denoise(noisy.V, noisy.F)
+    plan = read_with_progress(noisy.V, noisy.F, {}, args.quiet)
     first, later = pass_lengths(plan)
     bar = ProgressBar(first, "denoise", enabled=not args.quiet, later=later)
     r = denoise(noisy.V, noisy.F, plan=plan, callback=bar)

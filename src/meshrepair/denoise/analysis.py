@@ -57,7 +57,7 @@ from meshrepair.denoise.scale import noise_scale, tangential_ratio
 from meshrepair.mesh.reorder import reordered
 from meshrepair.model.noise import noise_statistics
 from meshrepair.model.schedule import default_stages
-from meshrepair.model.solver import ADMMSolver, SolverOptions
+from meshrepair.model.solver import ADMMSolver, SolverOptions, StopRequested
 
 log = logging.getLogger("meshrepair.denoise.run")
 
@@ -68,7 +68,7 @@ is memory-bound there, and the reordering measured 1.33 s instead of 1.76 s per 
 coordinate-dependent ordering, which keeps the rotation test exact to rounding)."""
 
 
-def _plan(V, F, *, digest: bool = True, probe_result=None, checked=None,
+def _plan(V, F, *, digest: bool = True, probe_result=None, checked=None, progress=None,
           **options) -> DenoisePlan:
     """Read ``(V, F)`` and decide (module docstring); returns the plan, runs no main solve.
 
@@ -83,9 +83,11 @@ def _plan(V, F, *, digest: bool = True, probe_result=None, checked=None,
     (off when the caller runs the plan on these arrays at once). ``probe_result``: a robust
     probe already run on an input of this connectivity and vertex order (:func:`_plan_one`);
     the plan reads it instead of running its own. ``checked``: the ``(report, topology)`` of
-    :func:`meshrepair.mesh.validate._check_mesh` on these arrays, when the caller has it."""
+    :func:`meshrepair.mesh.validate._check_mesh` on these arrays, when the caller has it.
+    ``progress``: called with each iteration entry of the probes (:func:`_probe_stopped`)."""
     memo: dict = {} if checked is None else {"check": checked}  # the readings of this input
-    p = _plan_one(V, F, digest=digest, probe_result=probe_result, memo=memo, **options)
+    p = _plan_one(V, F, digest=digest, probe_result=probe_result, memo=memo, progress=progress,
+                  **options)
     first, p._state.first_probe = p._state.first_probe, None
     auto = options.get("willmore_weight") is None
     band = _band(V, F, p, memo) if auto and p.willmore_weight <= 1.0 else None
@@ -120,7 +122,8 @@ def _plan_one(V, F, *, lam, th, a, robust_iters, feature_iters, mask_update_ever
               presmoothed: bool = False, read_from: np.ndarray | None = None,
               capped: bool = False, white: bool = False, organic: bool = False,
               probe_result=None, digest: bool = True,
-              memo: dict | None = None, band: BandRead | None = None) -> DenoisePlan:
+              memo: dict | None = None, band: BandRead | None = None,
+              progress=None) -> DenoisePlan:
     """One noise model's plan: the white model's with ``white`` (Willmore weight 1), else the
     reading's; with ``organic``, the crease support is not taken as a CAD part (the organic
     alternative of :mod:`meshrepair.denoise.structure`); ``probe_result`` is a probe already
@@ -212,11 +215,11 @@ def _plan_one(V, F, *, lam, th, a, robust_iters, feature_iters, mask_update_ever
             probe already reads crease support (:func:`scalefree.gated_probe`)."""
             if not (PROBE_EARLY_STOP and _sf.two_phase(q_edges)):
                 return ADMMSolver(Fw, len(V), options=SolverOptions(stages=(st1,), **kw),
-                                  topo=topo_w).solve(Vd, Vi)
+                                  topo=topo_w).solve(Vd, Vi, callback=progress)
             return _sf.gated_probe(ADMMSolver, SolverOptions, Fw, len(V), topo_w, st1, kw,
-                                   Vd, Vi, q_edges, th)
+                                   Vd, Vi, q_edges, th, callback=progress)
 
-        r1 = run_probe(kw1) if probe_result is None else probe_result
+        r1 = _probe_stopped(run_probe(kw1) if probe_result is None else probe_result)
         first_probe = r1  # the one probe of the call, shared by both noise models' plans
         tr = _once(memo, "tangential", lambda: tangential_ratio(Vt_w, Fw, r1.V, topo=topo_w))
         ns = _once(memo, "scale", lambda: noise_scale(Vn_w, Fw, reference=r1.V, topo=topo_w))
@@ -324,7 +327,7 @@ def _plan_one(V, F, *, lam, th, a, robust_iters, feature_iters, mask_update_ever
     kp = 0
     inner_plan = None
     if sup_v is not None and willmore_weight is None and lam is None and not presmoothed:
-        kp, inner_plan = _plan_presmooth(V, F, st, options, dec=dec)
+        kp, inner_plan = _plan_presmooth(V, F, st, options, dec=dec, progress=progress)
     elif sup_v is not None and not presmoothed:
         dec.append(Decision("presmooth_steps", 0, "off: lam or willmore_weight set by the "
                             "user (the coarse-to-fine low-pass and the correlated low-pass "
@@ -391,6 +394,17 @@ def _band(V, F, p: DenoisePlan, memo: dict) -> BandRead | None:
     return b if _cl.band_correlated(st.gamma, b.tau, b.steps) else None
 
 
+def _probe_stopped(r):
+    """The probe's result ``r``, or the user's stop it ended by raised again: a probe that a
+    Ctrl-C (``KeyboardInterrupt``) or the progress callback (:class:`StopRequested`) stopped
+    read part of the input, and no plan is made from it."""
+    if r.stop_reason == "interrupted":
+        raise KeyboardInterrupt
+    if r.stop_reason == "callback":
+        raise StopRequested("the reading of the input (the probe) was stopped by the callback")
+    return r
+
+
 def _once(memo: dict | None, key: str, read):
     """``read()``, computed once per :func:`_plan` call: the plans it makes of one input (the
     white and the correlated model's, the CAD and the organic reading's) read the same arrays
@@ -403,7 +417,7 @@ def _once(memo: dict | None, key: str, read):
     return memo[key]
 
 
-def _plan_presmooth(V, F, st: _State, options: dict, *, dec: list):
+def _plan_presmooth(V, F, st: _State, options: dict, *, dec: list, progress=None):
     """The coarse-to-fine decision: Taubin pairs ``k`` on the input for heavy noise on an
     organic mesh (:func:`presmooth_steps`), capped at the mesh's resolution and shortened
     where the low-passed input reads relief at the mesh's scale; with ``k > 0`` the plan of the
@@ -444,7 +458,7 @@ def _plan_presmooth(V, F, st: _State, options: dict, *, dec: list):
                   n_solver=o["n_solver"], stages=None, huber_delta=o["huber_delta"],
                   willmore_weight=None, regions=o["regions"], polish=False,
                   presmoothed=True, read_from=Vread, capped=kc < kp0,
-                  digest=bool(st.mesh_key))
+                  digest=bool(st.mesh_key), progress=progress)
     for q in (inner, inner.if_correlated):  # the raw input, for the final low-pass
         if q is not None and q._state is not None:
             q._state.lowpassed_from = (V, int(kp))

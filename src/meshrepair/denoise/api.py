@@ -181,8 +181,10 @@ def denoise(
     polish : apply the automatic polish rule (:func:`polish_rule`,
     :mod:`meshrepair.denoise.polish`);
         ``False`` never polishes.
-    callback : called with each iteration's history entry; raise
-        :class:`meshrepair.model.solver.StopRequested` to stop early.
+    callback : called with each iteration's history entry of the main solve; raise
+        :class:`meshrepair.model.solver.StopRequested` to stop early. A ``KeyboardInterrupt``
+        (Ctrl-C) during the main solve returns its current iterate (``stop_reason``
+        ``"interrupted"``); during the reading before it (the probe) it is raised again.
     plan : a plan of this mesh from :func:`plan_denoise`, possibly edited with
         :func:`dataclasses.replace`; it is run as it is (no reading again), and every other
         option except ``callback`` must then be left at its default.
@@ -285,6 +287,7 @@ def plan_denoise(
     willmore_weight: float | None = None,
     regions: bool = True,
     polish: bool = True,
+    callback: Callable[[dict], None] | None = None,
 ) -> DenoisePlan:
     """The plan :func:`denoise` would run on ``(V, F)``, without the main solve.
 
@@ -294,6 +297,12 @@ def plan_denoise(
     as :func:`denoise`; an option the user sets appears in the plan as set by the user, with
     what it switched off. Deterministic: the same input gives the same plan.
 
+    ``callback`` is called with each iteration's history entry of the probe (the robust
+    solve that reads the crease support; a second one on the low-passed input when the plan
+    low-passes heavy noise first), for a progress display; a ``KeyboardInterrupt`` during the
+    probe, or :class:`meshrepair.model.solver.StopRequested` raised by the callback, is raised
+    again (a plan is not made from part of the reading).
+
     Returns
     -------
     DenoisePlan
@@ -301,18 +310,20 @@ def plan_denoise(
         :func:`dataclasses.replace` of any of ``plan.editable()``.
     """
     from meshrepair.mesh.array_contract import as_arrays
+    from meshrepair.options import check_callable
 
     options = {k: v for k, v in locals().items() if k in _OPTION_DEFAULTS}
+    check_callable("callback", callback)
     V, F = as_arrays(V, F)
     sub = _checked_in_use(V, F)
     with heap_allocations():
         if sub is None:
-            return _plan(V, F, **options)
-        return _plan(sub[1], sub[2], checked=sub[3], **options)
+            return _plan(V, F, progress=callback, **options)
+        return _plan(sub[1], sub[2], checked=sub[3], progress=callback, **options)
 
 
 _OPTION_DEFAULTS = {k: p.default for k, p in inspect.signature(plan_denoise).parameters.items()
-                    if p.kind is p.KEYWORD_ONLY}
+                    if p.kind is p.KEYWORD_ONLY and k != "callback"}
 """The options of :func:`denoise` a plan replaces, with their defaults."""
 
 

@@ -165,7 +165,8 @@ def continue_probe(support: float) -> bool:
     return bool(support > GATE_SUPPORT)
 
 
-def gated_probe(solver_cls, options_cls, F, n_vertices, topo, stage, kw, Vd, Vi, q, th):
+def gated_probe(solver_cls, options_cls, F, n_vertices, topo, stage, kw, Vd, Vi, q, th, *,
+                callback=None):
     """The two-phase probe of a mesh of radius ``q`` (edge lengths); phase 2 *continues*
     phase 1's run.
 
@@ -180,6 +181,7 @@ def gated_probe(solver_cls, options_cls, F, n_vertices, topo, stage, kw, Vd, Vi,
     ``iterations`` the whole run's, with ``probe_phases`` (1 or 2) and ``probe_gate_support``
     (f at phase 1). When phase 2 does not run, the result also carries ``crease_support``, the
     ``crease_network.supported`` read of its normals, so the caller does not compute it again.
+    ``callback`` is called with each iteration entry of both phases.
     """
     import logging
 
@@ -187,10 +189,10 @@ def gated_probe(solver_cls, options_cls, F, n_vertices, topo, stage, kw, Vd, Vi,
 
     solver = solver_cls(F, n_vertices, options=options_cls(
         stages=(stage,), **{**kw, "tol": float(stage.switch_tol)}), topo=topo)
-    r = solver.solve(Vd, Vi, keep_state=True)
+    r = solver.solve(Vd, Vi, keep_state=True, callback=callback)
     state, r.state = r.state, None
     r.probe_phases, r.probe_gate_support = 1, float("nan")
-    if r.iterations >= int(stage.max_iter) or r.stop_reason == "callback":
+    if r.iterations >= int(stage.max_iter) or r.stop_reason in ("callback", "interrupted"):
         return r
     r.crease_support = _cn.supported(topo, r.N, th=th)  # phase 1's (support, network)
     f = float(r.crease_support[0].mean())
@@ -200,6 +202,6 @@ def gated_probe(solver_cls, options_cls, F, n_vertices, topo, stage, kw, Vd, Vi,
     if not continue_probe(f):
         return r
     del r
-    r2 = solver.resume(state, tol=float(kw["tol"]))
+    r2 = solver.resume(state, tol=float(kw["tol"]), callback=callback)
     r2.probe_phases, r2.probe_gate_support = 2, f
     return r2
