@@ -30,6 +30,30 @@ def test_sphere_hole_seam_like_surround_and_curvature_ratio_one(r):
     assert res.holes[0].as_dict()["quality"] == q
 
 
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_noise_around_the_hole_is_not_read_as_curvature(seed):
+    """On a sphere with noise of 0.2 mean edge lengths the default fill still continues the
+    sphere: the ratio reads the shape's curvature (|H| low-passed over 3 rings), near 1, and
+    the fill is not flagged (the magnitude of the raw |H| read 0.30-0.34 and flagged it)."""
+    import meshrepair as mr
+
+    s = trimesh.creation.icosphere(4)
+    V, F = np.asarray(s.vertices), np.asarray(s.faces)
+    Vc, Fc = cut_holes(mr.add_noise(V, F, 0.2, seed=seed), F, 8, n_holes=1, seed=seed)[:2]
+    q = fill_holes(Vc, Fc).holes[0].quality
+    assert 0.8 < q["curvature_ratio"] < 1.4 and not q["check"], q
+
+
+def test_low_pass_keeps_the_sides_of_the_seam_apart():
+    from meshrepair.fill.quality import _low_passed
+
+    # a path 0-1-2-3: vertices 0, 1 original, 2, 3 new; the seam edge 1-2 is not averaged over
+    edges = np.array([[0, 1], [1, 2], [2, 3]])
+    H = np.array([1.0, 3.0, 10.0, 20.0])
+    np.testing.assert_allclose(_low_passed(H, edges, 2, 1), [3.0, 1.0, 20.0, 10.0])
+    np.testing.assert_allclose(_low_passed(H, edges, 2, 2), H)
+
+
 def test_flat_patch_in_a_sphere_is_flagged():
     """The flat membrane (no fairing, no solve) in the same hole: a kink at the seam and a patch
     far less curved than the sphere; both are read out and the hole is flagged."""

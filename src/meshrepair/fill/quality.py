@@ -6,11 +6,17 @@ For a filled hole with patch faces ``P``:
 
 * ``seam_deg``: mean dihedral angle across the loop edges (one patch face, one original face);
 * ``surround_deg``: mean dihedral angle of the original edges within 3 rings of the patch;
-* ``curvature_ratio``: ``(mean |H| over the patch's interior vertices + κ0) / (mean |H| over
+* ``curvature_ratio``: ``(mean |H̄| over the patch's interior vertices + κ0) / (mean |H̄| over
   the original vertices within 3 rings, loop and mesh-boundary vertices excluded, + κ0)``,
-  ``H`` the cotangent mean curvature and ``κ0 = 0.01 / l̄`` (a radius of 100 edge lengths: a
-  flat patch in a flat surround has ratio 1, not 0/0). A patch continuing its surround has a
-  ratio near 1 and a seam angle near the surround's.
+  ``κ0 = 0.01 / l̄`` (a radius of 100 edge lengths: a flat patch in a flat surround has ratio
+  1, not 0/0). ``H̄`` is the cotangent mean curvature ``H`` low-passed by
+  :data:`CURVATURE_SMOOTHING` umbrella averages, each over the neighbours on the same side of
+  the seam (original vertices with original ones, new with new: the patch and its surround
+  are read apart): ``|H|`` of a noisy scan is mostly its noise, which the mean of a
+  magnitude does not cancel, so without the low-pass every smooth patch in a raw scan read
+  as a fraction as curved as its surround; averaged over 3 rings (the surround's width),
+  zero-mean noise cancels and the shape's curvature stays. A patch continuing its surround
+  has a ratio near 1 and a seam angle near the surround's.
 * ``check``: True when ``seam_deg > SEAM_CHECK_FACTOR * surround_deg + SEAM_CHECK_MARGIN`` or
   the ratio is outside ``[1 / CURVATURE_CHECK, CURVATURE_CHECK]``; ``why`` says which.
 """
@@ -25,6 +31,10 @@ from meshrepair.holes import HoleReport
 SEAM_CHECK_FACTOR = 2.0
 SEAM_CHECK_MARGIN = 5.0
 """A seam sharper than ``SEAM_CHECK_FACTOR * surround + SEAM_CHECK_MARGIN`` degrees is flagged."""
+
+CURVATURE_SMOOTHING = 3
+"""Umbrella averages of the mean curvature before its magnitude is read (the surround's width
+in rings)."""
 
 CURVATURE_CHECK = 2.0
 """A patch more than this many times as curved as its surround (or less than its inverse) is
@@ -42,8 +52,8 @@ def hole_quality(V: np.ndarray, F: np.ndarray, reports: list[HoleReport], nV: in
     blocks = _blocks(reports, nV, nF)
     if not blocks:
         return
-    H = np.abs(mean_curvature(V, F))
     topo = edge_topology(F, len(V))
+    H = np.abs(_low_passed(mean_curvature(V, F), topo.edges, nV, CURVATURE_SMOOTHING))
     on_bnd = np.zeros(len(V), bool)
     on_bnd[topo.edges[topo.boundary].ravel()] = True
     k0 = 0.01 / max(mean_edge_length(V, F), 1e-300)
@@ -73,6 +83,25 @@ def hole_quality(V: np.ndarray, F: np.ndarray, reports: list[HoleReport], nV: in
         rep.quality = {"seam_deg": round(float(seam), 3), "surround_deg": round(float(ring), 3),
                        "curvature_ratio": round(float(ratio), 4), "check": bool(why),
                        "why": "; ".join(why)}
+
+
+def _low_passed(H: np.ndarray, edges: np.ndarray, nV: int, steps: int) -> np.ndarray:
+    """``H`` after ``steps`` umbrella averages ``H_i ← mean of H_j`` over the neighbours ``j`` of
+    ``i`` on its side of the seam (both ``< nV``, or both ``≥ nV``); a vertex without such a
+    neighbour keeps its value."""
+    import scipy.sparse as sp
+
+    n = len(H)
+    a, b = edges[:, 0], edges[:, 1]
+    same = (a < nV) == (b < nV)
+    a, b = a[same], b[same]
+    A = sp.csr_matrix((np.ones(2 * len(a)), (np.r_[a, b], np.r_[b, a])), shape=(n, n))
+    deg = np.asarray(A.sum(axis=1)).ravel()
+    has = deg > 0
+    out = np.asarray(H, dtype=np.float64).copy()
+    for _ in range(int(steps)):
+        out = np.where(has, (A @ out) / np.where(has, deg, 1.0), out)
+    return out
 
 
 def quality_line(q: dict) -> str:
