@@ -193,7 +193,7 @@ if HAVE_NUMBA:
     def _nb_normalize_z(N, Nv, rho2, beta2):  # pragma: no cover - compiled
         z = np.empty_like(N)
         for f in range(N.shape[0]):
-            q = np.sqrt(N[f, 0] ** 2 + N[f, 1] ** 2 + N[f, 2] ** 2)
+            q = np.sqrt(N[f, 0] * N[f, 0] + N[f, 1] * N[f, 1] + N[f, 2] * N[f, 2])
             iq = 1.0 / q if q > 0 else 0.0
             for k in range(3):
                 if q > 0:

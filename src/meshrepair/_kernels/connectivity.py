@@ -202,7 +202,7 @@ if HAVE_NUMBA:
             lo1, hi1 = min(lo1, P[i, 1]), max(hi1, P[i, 1])
             lo2, hi2 = min(lo2, P[i, 2]), max(hi2, P[i, 2])
         span = max(max(hi0 - lo0, hi1 - lo1), max(hi2 - lo2, 1e-300))
-        K = 2**bits - 1
+        K = (1 << bits) - 1
         code = np.zeros(n, np.int64)
         for i in range(n):
             q0 = np.int64((P[i, 0] - lo0) / span * K)

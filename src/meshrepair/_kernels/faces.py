@@ -123,7 +123,7 @@ if HAVE_NUMBA:
                 vn[v, 1] += cy
                 vn[v, 2] += cz
         for v in range(V.shape[0]):
-            q = np.sqrt(vn[v, 0] ** 2 + vn[v, 1] ** 2 + vn[v, 2] ** 2)
+            q = np.sqrt(vn[v, 0] * vn[v, 0] + vn[v, 1] * vn[v, 1] + vn[v, 2] * vn[v, 2])
             if q > 0:
                 vn[v, 0] /= q
                 vn[v, 1] /= q

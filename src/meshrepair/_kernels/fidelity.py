@@ -30,7 +30,7 @@ if HAVE_NUMBA:
     @njit(cache=True)
     def _anchor_vertex(V, V0, vn, s, v, w, out):  # pragma: no cover - compiled
         # out[v] = V[v] - w P (V[v] - V0[v]), P = I - n nᵀ, n = vn[s] / |vn[s]|
-        q = np.sqrt(vn[s, 0] ** 2 + vn[s, 1] ** 2 + vn[s, 2] ** 2)
+        q = np.sqrt(vn[s, 0] * vn[s, 0] + vn[s, 1] * vn[s, 1] + vn[s, 2] * vn[s, 2])
         n0, n1, n2 = vn[s, 0], vn[s, 1], vn[s, 2]
         if q > 0:
             n0 /= q

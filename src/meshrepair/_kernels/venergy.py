@@ -165,7 +165,7 @@ if HAVE_NUMBA:
             e += zn
             # the Jacobi scale of vhess_diag (same expressions)
             q2 = max(c2, 1e-300)
-            s = np.sqrt(zx ** 2 + zy ** 2 + zz ** 2) / q2
+            s = np.sqrt(zx * zx + zy * zy + zz * zz) / q2
             h[i] += s * (ux * ux + uy * uy + uz * uz)
             h[j] += s * (bx * bx + by * by + bz * bz)
             h[k] += s * (ax * ax + ay * ay + az * az)
@@ -216,7 +216,7 @@ if HAVE_NUMBA:
             i, j, k = F[m, 0], F[m, 1], F[m, 2]
             ax, ay, az, bx, by, bz, cx, cy, cz = _tri(V, i, j, k)
             q2 = max(cx * cx + cy * cy + cz * cz, 1e-300)
-            zn = np.sqrt(z[m, 0] ** 2 + z[m, 1] ** 2 + z[m, 2] ** 2) / q2
+            zn = np.sqrt(z[m, 0] * z[m, 0] + z[m, 1] * z[m, 1] + z[m, 2] * z[m, 2]) / q2
             dx, dy, dz = V[k, 0] - V[j, 0], V[k, 1] - V[j, 1], V[k, 2] - V[j, 2]
             h[i] += zn * (dx * dx + dy * dy + dz * dz)
             h[j] += zn * (bx * bx + by * by + bz * bz)
