@@ -2,9 +2,10 @@
 
 numba compiles the implementation of an operator such as ``x ** 2`` once per process, with the
 fast-math flags of the first kernel that uses it, and reuses it in every later kernel; a kernel
-written with ``**`` then rounded differently depending on which kernels ran first (the
-normalisation of the ADMM's N-update, :func:`meshrepair._kernels.admm.normalize_z`, differed in
-the last bits between a process that had run the vertex normals first and one that had not).
+written with ``**`` then rounds differently depending on which kernels ran first (the
+normalisation of the ADMM's N-update, :func:`meshrepair._kernels.admm.normalize_z`, with
+``x ** 2`` differs in the last bits between a process that ran the vertex normals first and
+one that did not).
 The non-convex solve amplifies such differences (docs/parameters.md, Known limits), so the
 kernels write powers as products (:mod:`meshrepair._kernels._jit`).
 """

@@ -53,6 +53,5 @@ V-gradient kernel measured 15 % faster on a 6.5k-vertex mesh (141 vs 165 µs); t
 Kernels write powers as products (``x * x``, never ``x ** 2``; tests/test_kernel_determinism.py):
 numba compiles the implementation of ``**`` once per process and reuses it in every kernel,
 with the fast-math flags of the first kernel that used it, so a kernel's rounding would depend
-on which kernels the process compiled before it (a kernel with ``x ** 2`` gave results that
-differed in the last bits between processes, and the non-convex solve amplifies such
-differences to percents of MSAE on its knife-edge rows)."""
+on which kernels the process compiled before it; the non-convex solve amplifies last-bit
+differences to percents of MSAE on its knife-edge rows (docs/parameters.md, Known limits)."""

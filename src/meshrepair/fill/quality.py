@@ -13,8 +13,8 @@ For a filled hole with patch faces ``P``:
   :data:`CURVATURE_SMOOTHING` umbrella averages, each over the neighbours on the same side of
   the seam (original vertices with original ones, new with new: the patch and its surround
   are read apart): ``|H|`` of a noisy scan is mostly its noise, which the mean of a
-  magnitude does not cancel, so without the low-pass every smooth patch in a raw scan read
-  as a fraction as curved as its surround; averaged over 3 rings (the surround's width),
+  magnitude does not cancel, so without the low-pass a smooth patch in a raw scan reads as a
+  fraction as curved as its surround; averaged over 3 rings (the surround's width),
   zero-mean noise cancels and the shape's curvature stays. A patch continuing its surround
   has a ratio near 1 and a seam angle near the surround's.
 * ``check``: True when ``seam_deg > SEAM_CHECK_FACTOR * surround_deg + SEAM_CHECK_MARGIN`` or
