@@ -89,13 +89,10 @@ def _low_passed(H: np.ndarray, edges: np.ndarray, nV: int, steps: int) -> np.nda
     """``H`` after ``steps`` umbrella averages ``H_i ← mean of H_j`` over the neighbours ``j`` of
     ``i`` on its side of the seam (both ``< nV``, or both ``≥ nV``); a vertex without such a
     neighbour keeps its value."""
-    import scipy.sparse as sp
+    from meshrepair.mesh.topology import vertex_adjacency
 
-    n = len(H)
-    a, b = edges[:, 0], edges[:, 1]
-    same = (a < nV) == (b < nV)
-    a, b = a[same], b[same]
-    A = sp.csr_matrix((np.ones(2 * len(a)), (np.r_[a, b], np.r_[b, a])), shape=(n, n))
+    same = (edges[:, 0] < nV) == (edges[:, 1] < nV)
+    A = vertex_adjacency(edges[same], len(H))
     deg = np.asarray(A.sum(axis=1)).ravel()
     has = deg > 0
     out = np.asarray(H, dtype=np.float64).copy()
